@@ -1,0 +1,96 @@
+// phymul command line: thin, parses arguments and calls the library.
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <iostream>
+
+#include "phymul/model.hpp"
+#include "phymul/run.hpp"
+#include "phymul/scene.hpp"
+#include "phymul/simulator.hpp"
+
+namespace {
+
+// Exit codes a script can tell apart.
+constexpr int kInputError = 1;
+constexpr int kUnstable = 3;
+constexpr int kNotConverged = 4;
+
+int report_scene_error(const phymul::SceneError& e) {
+  for (const auto& d : e.diagnostics()) std::cerr << d.str() << '\n';
+  std::cerr << fmt::format("{} problem(s) found\n", e.diagnostics().size());
+  return kInputError;
+}
+
+int check(const std::string& file) {
+  try {
+    const phymul::Scene scene = phymul::load_scene(file);
+    const phymul::Model model = phymul::compile_scene(scene);
+    phymul::Simulator sim(model);
+    std::cout << fmt::format(
+        "{}: ok ({} objects, {} nodes, {} cells; dt {:.3g} s, stable "
+        "estimate {:.3g} s)\n",
+        file, model.components.size(), model.node_count(), model.cells.size(), sim.dt(),
+        phymul::stable_time_step(model));
+    return 0;
+  } catch (const phymul::SceneError& e) {
+    return report_scene_error(e);
+  }
+}
+
+int run(const std::string& file, const std::string& out, bool quiet) {
+  try {
+    const phymul::Scene scene = phymul::load_scene(file);
+    phymul::RunOptions options{out, !quiet && isatty(fileno(stderr))};
+    const phymul::RunReport r = phymul::run_scene(scene, options);
+    if (!quiet)
+      std::cout << fmt::format(
+          "{}: {} after {} steps ({:.4g} s simulated, {:.3g} s wall, {:.1f} ns/node/step); "
+          "{} frames in {}\n",
+          file, r.status, r.steps, r.simulated_time, r.wall_time, r.ns_per_node_per_step, r.frames,
+          out);
+    if (r.status == "unstable") {
+      std::cerr << "error: " << r.message << '\n';
+      return kUnstable;
+    }
+    if (r.status == "not-converged") {
+      std::cerr << "error: " << r.message << '\n';
+      return kNotConverged;
+    }
+    return 0;
+  } catch (const phymul::SceneError& e) {
+    return report_scene_error(e);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"phymul: soft organs and their surroundings (Phymul local shape memory model)"};
+  app.require_subcommand(1);
+  std::string scene_file, out_dir = "out";
+  bool quiet = false;
+
+  auto* run_cmd = app.add_subcommand("run", "simulate a scene and write its results");
+  run_cmd->add_option("scene", scene_file, "scene file (YAML)")->required();
+  run_cmd->add_option("-o,--output", out_dir, "output directory")->capture_default_str();
+  run_cmd->add_flag("-q,--quiet", quiet, "no progress and no summary");
+
+  auto* check_cmd = app.add_subcommand("check", "validate a scene without running it");
+  check_cmd->add_option("scene", scene_file, "scene file (YAML)")->required();
+
+  app.add_subcommand("schema", "print the scene file reference (Markdown)");
+
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (*run_cmd) return run(scene_file, out_dir, quiet);
+    if (*check_cmd) return check(scene_file);
+    std::cout << phymul::scene_reference_markdown();
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << '\n';
+    return kInputError;
+  }
+}

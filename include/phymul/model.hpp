@@ -1,0 +1,110 @@
+// Model (compiled once, read-only during a run) and State (what a step changes), after
+// MuJoCo's mjModel / mjData split. Node data are arrays over all nodes of all components.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "phymul/mesh.hpp"
+#include "phymul/scene.hpp"
+
+namespace phymul {
+
+// Local shape memory of one elastic component (DESIGN 2.1): every node is pulled towards
+// an attraction position a = g + R c built from its neighbours, with f = K (a - x).
+struct ShapeMemory {
+  std::string component;
+  double stiffness = 0.0;  // N/m
+  FrameMode frame = FrameMode::polar;
+  bool reaction = true;             // spread -f/n over the neighbours so momentum is kept
+  std::vector<int> nodes;           // global ids of the nodes that carry a memory
+  Adjacency neighbours;             // per memory node, global ids; the ordered one-ring on surfaces
+  std::vector<Vec3> rest_offset;    // c = R0^T (X - G0), m
+  std::vector<Vec3> rest_centroid;  // G0, m
+  // Planar neighbourhoods (every surface node, flat interior ones) leave the best-fit
+  // rotation free about their normal: such nodes add the normal pair with this weight (m^2).
+  std::vector<double> normal_weight;
+  std::vector<Vec3> rest_normal;  // unit n0 of those nodes (zero for the others)
+  // Two neighbours (positions within the row) spanning the node's frame: the most
+  // orthogonal pair at rest. Used by the `frame` mode and for flat interior normals.
+  std::vector<std::array<int, 2>> frame_pair;
+  bool surface = false;  // neighbours are ordered rings (normal from the ring)
+};
+
+// Constant enclosed volume of a closed, outward-oriented surface (DESIGN 2.2).
+struct VolumeConstraint {
+  std::string component;
+  std::vector<Triangle> triangles;  // global node ids
+  std::vector<int> nodes;           // the surface's nodes, sorted
+  double target_volume = 0.0;       // m^3
+};
+
+struct AppliedForce {
+  std::vector<int> nodes;
+  Schedule force;  // N on each node
+};
+
+struct PrescribedDisplacement {
+  std::vector<int> nodes;
+  std::array<bool, 3> axes{true, true, true};
+  Schedule displacement;  // m, from the rest position
+};
+
+struct Component {
+  std::string name;
+  int first_node = 0, node_count = 0;
+  int first_cell = 0, cell_count = 0;
+  bool volumetric = true;
+  std::vector<Triangle> boundary;                     // global ids; empty when the surface is open
+  std::map<std::string, std::vector<int>> node_sets;  // global ids
+};
+
+struct Model {
+  std::vector<Vec3> rest_position;  // m
+  std::vector<double> mass;         // kg
+  std::vector<Cell> cells;          // global node ids (output)
+  std::vector<int> cell_component;
+  std::vector<Component> components;
+  std::vector<ShapeMemory> shape_memory;
+  std::vector<VolumeConstraint> volumes;
+  std::vector<AppliedForce> forces;
+  std::vector<PrescribedDisplacement> prescribed;
+  // Per node and axis: 1/m where the node is free to move along that axis, 0 where a
+  // position constraint holds it. The projection of global constraints moves nodes by it.
+  std::vector<Vec3> inverse_mass;
+  Vec3 gravity = Vec3::Zero();  // m/s^2
+  double damping = 0.0;         // 1/s
+  SimulationSpec settings;
+
+  int node_count() const { return int(rest_position.size()); }
+};
+
+// Building blocks of a model (compile_scene uses them; embedding programs may too).
+// Each throws std::invalid_argument with an actionable message.
+int add_elastic_component(Model& model, const std::string& name, const Mesh& mesh,
+                          const MaterialSpec& material);
+void add_volume_constraint(Model& model, int component);
+void add_fixed_nodes(Model& model, const std::vector<int>& nodes);
+void add_prescribed_displacement(Model& model, PrescribedDisplacement prescribed);
+void add_applied_force(Model& model, AppliedForce force);
+// Recomputes derived arrays (inverse_mass); call after the last add_*.
+void finalize(Model& model);
+
+// A scene file's description into a model; semantic problems (a node set that selects no
+// node, a volume constraint on an open surface, ...) throw SceneError with their location.
+Model compile_scene(const Scene& scene);
+
+struct State {
+  double time = 0.0;  // s
+  long step = 0;
+  std::vector<Vec3> x, v;                    // m, m/s
+  std::vector<Vec3> f;                       // N, every force but damping, at (x, time)
+  std::vector<Eigen::Quaterniond> rotation;  // per shape-memory node: last best-fit rotation
+  double shape_memory_energy = 0.0;          // J, sum of K |a - x|^2 / 2 at the last force pass
+};
+
+State make_state(const Model& model);
+
+}  // namespace phymul

@@ -1,0 +1,145 @@
+// Scene files: the YAML a user writes, parsed and checked against the parameter table
+// into a plain description. Turning it into a Model is compile_scene (model.hpp).
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "phymul/mesh.hpp"
+#include "phymul/schedule.hpp"
+
+namespace phymul {
+
+struct SourceLoc {
+  std::string file;
+  int line = 0;    // 1-based; 0 when unknown
+  int column = 0;  // 1-based
+};
+
+// One problem found in an input: "file:line:column: message".
+struct Diagnostic {
+  SourceLoc loc;
+  std::string message;
+  std::string str() const;
+};
+
+// Thrown with every problem found, not just the first.
+class SceneError : public std::runtime_error {
+ public:
+  explicit SceneError(std::vector<Diagnostic> diagnostics);
+  const std::vector<Diagnostic>& diagnostics() const { return diagnostics_; }
+
+ private:
+  std::vector<Diagnostic> diagnostics_;
+};
+
+enum class Integrator { verlet, newton_cotes };
+enum class SolveMode { dynamic, static_equilibrium };
+enum class FrameMode { polar, frame };
+
+struct SimulationSpec {
+  std::optional<double> dt;  // s; nullopt = "auto"
+  double dt_safety = 0.5;    // fraction of the stability limit used by dt: auto
+  double duration = 1.0;     // s (static: the schedules are evaluated at its end)
+  Integrator integrator = Integrator::verlet;
+  SolveMode mode = SolveMode::dynamic;
+  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  // m/s^2
+  double damping = 0.0;                               // 1/s, mass-proportional viscous damping
+  double tolerance = 1e-6;        // N, static mode: largest residual nodal force
+  long max_iterations = 1000000;  // static mode
+  int load_steps = 1;             // static mode: equilibria at duration * k / load_steps
+  bool kinetic_damping = true;    // static mode: zero velocities at kinetic-energy peaks
+  SourceLoc loc;
+};
+
+struct MeshSpec {
+  std::string generator;              // "box", "ellipsoid", "cylinder"
+  CellType element = CellType::hexa;  // box: hexa|tetra
+  bool surface = false;               // ellipsoid/cylinder: closed surface instead of volume
+  Eigen::Vector3d size = Eigen::Vector3d::Constant(0.01);   // box, m
+  std::array<int, 3> cells{4, 4, 4};                        // box
+  Eigen::Vector3d radii = Eigen::Vector3d::Constant(0.01);  // ellipsoid, m
+  int subdivisions = 2;                                     // ellipsoid
+  int layers = 3;                                           // ellipsoid volume
+  double radius = 0.01, length = 0.02;                      // cylinder, m
+  int around = 16, along = 4, rings = 2;                    // cylinder
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();         // m
+  SourceLoc loc;
+};
+
+struct MaterialSpec {
+  double stiffness = 0.0;         // N/m, shape memory spring of each node
+  std::optional<double> density;  // kg/m^3 (volumetric meshes)
+  std::optional<double> mass;     // kg, total, spread by lumped cell measure
+  FrameMode frame = FrameMode::polar;
+  bool reaction = true;  // apply -f/n to the neighbours (momentum kept)
+  SourceLoc loc;
+};
+
+struct NodeSelector {
+  enum class Kind { all, named, indices, box, sphere, half_space };
+  Kind kind = Kind::all;
+  std::string name;          // named: a node set of the generated mesh
+  std::vector<int> indices;  // indices: from "0-3,7" or a list
+  Eigen::Vector3d min = Eigen::Vector3d::Zero(), max = Eigen::Vector3d::Zero();  // box, m
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();                              // sphere, m
+  double radius = 0.0;                                                           // sphere, m
+  Eigen::Vector3d point = Eigen::Vector3d::Zero(),
+                  normal = Eigen::Vector3d::UnitZ();  // half-space: (x - point).normal >= 0
+  SourceLoc loc;
+};
+
+struct ObjectSpec {
+  std::string name;
+  MeshSpec mesh;
+  MaterialSpec material;
+  bool volume_constraint = false;  // keep the volume enclosed by its boundary surface
+  SourceLoc loc;
+};
+
+struct LoadSpec {  // applied nodal force, the same on every selected node
+  std::string object;
+  NodeSelector nodes;
+  Schedule force;  // N per node
+  SourceLoc loc;
+};
+
+struct ConstraintSpec {
+  enum class Kind { fixed, displacement };
+  Kind kind = Kind::fixed;
+  std::string object;
+  NodeSelector nodes;
+  std::array<bool, 3> axes{true, true, true};  // displacement: which axes are prescribed
+  Schedule displacement;                       // m, from the rest position
+  SourceLoc loc;
+};
+
+struct OutputSpec {
+  double interval = 0.0;  // s between frames (dynamic); 0 = first and last frame only
+  bool vtk = true;
+  SourceLoc loc;
+};
+
+struct Scene {
+  std::filesystem::path file;
+  SimulationSpec simulation;
+  std::vector<ObjectSpec> objects;
+  std::vector<LoadSpec> loads;
+  std::vector<ConstraintSpec> constraints;
+  OutputSpec output;
+};
+
+// Parses and checks a scene file against the parameter table; throws SceneError listing
+// every problem (unreadable file, YAML syntax, unknown key with did-you-mean, wrong type,
+// value out of range, missing required field).
+Scene load_scene(const std::filesystem::path& file);
+Scene parse_scene(const std::string& text, const std::string& file_name);
+
+// The scene reference (Markdown), generated from the parameter table.
+std::string scene_reference_markdown();
+
+}  // namespace phymul

@@ -1,0 +1,72 @@
+// Stepping a model: explicit dynamics (DESIGN 2.3) and static relaxation to equilibrium.
+#pragma once
+
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "phymul/model.hpp"
+
+namespace phymul {
+
+// A run that became unstable: names the node, component and time, and what to change.
+class InstabilityError : public std::runtime_error {
+ public:
+  InstabilityError(const std::string& message, int node, double time)
+      : std::runtime_error(message), node(node), time(time) {}
+  int node;
+  double time;
+};
+
+// Largest stable time step (s) of the explicit schemes for this model, from a Gershgorin
+// bound on the shape-memory stiffness over the node masses (undamped central difference
+// limit 2/omega_max).
+double stable_time_step(const Model& model);
+
+struct StaticResult {
+  bool converged = false;
+  long iterations = 0;    // steps of pseudo-dynamics, all load steps together
+  double residual = 0.0;  // N, largest free residual force at the end
+};
+
+class Simulator {
+ public:
+  explicit Simulator(Model model);
+
+  const Model& model() const { return model_; }
+  const State& state() const { return state_; }
+  State& state() { return state_; }
+  double dt() const { return dt_; }
+  void set_dt(double dt) { dt_ = dt; }  // s
+
+  // One explicit step of dt with the scene's integrator; loads at the new time.
+  void step();
+  // Relax to equilibrium with the loads of load_time (s); stops when the largest free
+  // residual force is below the scene's tolerance or after max_iterations.
+  StaticResult relax(double load_time, long max_iterations,
+                     const std::function<void(long, double)>& progress = {});
+  // The scene's static mode: load steps up to the scene's duration.
+  StaticResult solve_static(const std::function<void(long, double)>& progress = {});
+
+  double kinetic_energy() const;  // J
+  // Largest nodal force (N) on the free axes, less the part a volume constraint balances.
+  double max_residual_force();
+  // Enclosed volume (m^3) of every component with a closed boundary, in component order
+  // (NaN for the others).
+  std::vector<double> component_volumes() const;
+
+ private:
+  void step_verlet(double dt, double load_time);
+  void step_newton_cotes(double dt, double load_time);
+  void check_stability() const;
+
+  Model model_;
+  State state_;
+  double dt_ = 0.0;
+  double load_time_ = 0.0;                                   // time at which State::f was evaluated
+  std::vector<Vec3> x_start_, v_start_, f_start_, scratch_;  // sized once: no allocation in a step
+  double size_scale_ = 1.0;                                  // m, diagonal of the rest bounding box
+};
+
+}  // namespace phymul

@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# make demo: runs every example, renders pictures and plots, says where they are.
+set -euo pipefail
+build=${1:-build}
+root=$(cd "$(dirname "$0")/.." && pwd)
+results="$root/results"
+mkdir -p "$results"
+py=/usr/bin/python3
+for scene in "$root"/examples/*.yaml; do
+  name=$(basename "$scene" .yaml)
+  out="$results/$name"
+  rm -rf "$out"
+  echo "== $name"
+  "$root/$build/phymul" run "$scene" -o "$out"
+  xvfb-run -a "$py" "$root/scripts/render.py" "$out/$name.pvd" "$out/$name.png" \
+    --rest --title "$name: last frame, |displacement|"
+  "$py" "$root/scripts/plot_monitors.py" "$out/monitors.csv" "$out/${name}_monitors.png" \
+    --title "$name"
+done
+echo
+echo "Results are in $results/<example>/:"
+echo "  <example>.png            the last frame, coloured by displacement (rest shape in grey)"
+echo "  <example>_monitors.png   kinetic energy, residual force and volumes over time"
+echo "  <example>.pvd            open in ParaView for the whole series (frames: *.vtu)"
+echo "  monitors.csv, report.json"

@@ -1,0 +1,29 @@
+// Constraints satisfied by projection after the force phase (DESIGN 2.2, 2.3 step 4).
+#pragma once
+
+#include <span>
+
+#include "phymul/model.hpp"
+
+namespace phymul {
+
+// Puts every prescribed axis exactly at rest position + displacement(load_time): fixed
+// nodes get their rest coordinates bit for bit.
+void apply_prescribed(const Model& model, std::span<Vec3> x, double load_time);
+
+// Volume gradient dV/dx_i (m^2) of a closed surface, accumulated into grad (zeroed first on
+// the constraint's nodes).
+void volume_gradient(const VolumeConstraint& c, std::span<const Vec3> x, std::span<Vec3> grad);
+
+// Moves the surface nodes along w_i dV/dx_i (w = per-axis inverse mass, 0 on held axes) by
+// the root of the cubic V(x + lambda d) = target nearest to 0. Returns lambda; throws
+// std::runtime_error when no free node can change the volume. grad is scratch (node count).
+double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
+                      std::span<Vec3> x, std::span<Vec3> grad);
+
+// All position constraints in the DESIGN's order: prescribed, then volumes (a few
+// Gauss-Seidel sweeps when surfaces share nodes).
+void apply_position_constraints(const Model& model, std::span<Vec3> x, double load_time,
+                                std::span<Vec3> scratch);
+
+}  // namespace phymul

@@ -1,0 +1,24 @@
+#include "constraints/constraints.hpp"
+
+namespace phymul {
+
+void apply_prescribed(const Model& model, std::span<Vec3> x, double load_time) {
+  for (const PrescribedDisplacement& p : model.prescribed) {
+    const Vec3 u = p.displacement.at(load_time);
+    for (int i : p.nodes)
+      for (int a = 0; a < 3; ++a)
+        if (p.axes[a]) x[i][a] = model.rest_position[i][a] + u[a];
+  }
+}
+
+void apply_position_constraints(const Model& model, std::span<Vec3> x, double load_time,
+                                std::span<Vec3> scratch) {
+  apply_prescribed(model, x, load_time);
+  // One pass is exact for disjoint surfaces; shared nodes need a few sweeps.
+  const int sweeps = model.volumes.size() > 1 ? 4 : 1;
+  for (int sweep = 0; sweep < sweeps; ++sweep)
+    for (const VolumeConstraint& c : model.volumes)
+      project_volume(c, model.inverse_mass, x, scratch);
+}
+
+}  // namespace phymul

@@ -1,0 +1,67 @@
+#include <fmt/format.h>
+
+#include <cmath>
+#include <stdexcept>
+
+#include "constraints/constraints.hpp"
+
+namespace phymul {
+namespace {
+
+// Coefficients of V(x + lambda d) = c0 + c1 l + c2 l^2 + c3 l^3, exact for a triangulated
+// surface since the volume is a cubic polynomial of the node positions.
+std::array<double, 4> volume_cubic(const VolumeConstraint& c, std::span<const Vec3> x,
+                                   std::span<const Vec3> d) {
+  std::array<double, 4> k{0, 0, 0, 0};
+  for (const Triangle& t : c.triangles) {
+    const Vec3 &xa = x[t[0]], &xb = x[t[1]], &xc = x[t[2]];
+    const Vec3 &da = d[t[0]], &db = d[t[1]], &dc = d[t[2]];
+    const Vec3 xbc = xb.cross(xc), dbc = db.cross(dc);
+    const Vec3 mixed = db.cross(xc) + xb.cross(dc);
+    k[0] += xa.dot(xbc);
+    k[1] += da.dot(xbc) + xa.dot(mixed);
+    k[2] += da.dot(mixed) + xa.dot(dbc);
+    k[3] += da.dot(dbc);
+  }
+  for (double& v : k) v /= 6.0;
+  return k;
+}
+
+}  // namespace
+
+void volume_gradient(const VolumeConstraint& c, std::span<const Vec3> x, std::span<Vec3> grad) {
+  for (int i : c.nodes) grad[i].setZero();
+  for (const Triangle& t : c.triangles) {
+    const Vec3 &a = x[t[0]], &b = x[t[1]], &d = x[t[2]];
+    grad[t[0]] += b.cross(d) / 6.0;
+    grad[t[1]] += d.cross(a) / 6.0;
+    grad[t[2]] += a.cross(b) / 6.0;
+  }
+}
+
+double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
+                      std::span<Vec3> x, std::span<Vec3> grad) {
+  volume_gradient(c, x, grad);
+  for (int i : c.nodes) grad[i] = grad[i].cwiseProduct(inverse_mass[i]);  // direction d
+  const auto k = volume_cubic(c, x, grad);
+  const double target = c.target_volume;
+  if (k[0] == target) return 0.0;
+  if (k[1] <= 0.0)
+    throw std::runtime_error(fmt::format(
+        "volume constraint of '{}': no free surface node can change its volume (all are held "
+        "by position constraints)",
+        c.component));
+  // Newton from lambda = 0 finds the root nearest to zero: V is increasing there (c1 > 0).
+  double lambda = 0.0;
+  for (int it = 0; it < 50; ++it) {
+    const double r = ((k[3] * lambda + k[2]) * lambda + k[1]) * lambda + k[0] - target;
+    const double slope = (3.0 * k[3] * lambda + 2.0 * k[2]) * lambda + k[1];
+    const double step = r / slope;
+    lambda -= step;
+    if (std::abs(step) <= 1e-16 * std::abs(lambda)) break;
+  }
+  for (int i : c.nodes) x[i] += lambda * grad[i];
+  return lambda;
+}
+
+}  // namespace phymul

@@ -1,0 +1,22 @@
+#include "forces/forces.hpp"
+
+#include "forces/shape_memory.hpp"
+
+namespace phymul {
+
+void compute_forces(const Model& model, State& s, double load_time) {
+  for (int i = 0; i < model.node_count(); ++i) s.f[i] = model.mass[i] * model.gravity;
+  for (const AppliedForce& load : model.forces) {
+    const Vec3 fi = load.force.at(load_time);
+    for (int i : load.nodes) s.f[i] += fi;
+  }
+  s.shape_memory_energy = 0.0;
+  size_t first_rotation = 0;
+  for (const ShapeMemory& m : model.shape_memory) {
+    std::span<Eigen::Quaterniond> rotations(s.rotation.data() + first_rotation, m.nodes.size());
+    s.shape_memory_energy += add_shape_memory_forces(m, model.rest_position, s.x, rotations, s.f);
+    first_rotation += m.nodes.size();
+  }
+}
+
+}  // namespace phymul

@@ -1,0 +1,289 @@
+#include "forces/shape_memory.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+#include <cmath>
+#include <stdexcept>
+
+namespace phymul {
+namespace {
+
+Vec3 centroid(std::span<const int> ids, std::span<const Vec3> p) {
+  Vec3 g = Vec3::Zero();
+  for (int j : ids) g += p[j];
+  return g / double(ids.size());
+}
+
+// Normal of an ordered ring around its centroid g: sum of consecutive cross products,
+// closed when the ring is a cycle. Consistent with the ring's orientation.
+Vec3 ring_normal(std::span<const int> ring, std::span<const Vec3> p, const Vec3& g) {
+  Vec3 n = Vec3::Zero();
+  for (size_t k = 0; k + 1 < ring.size(); ++k) n += (p[ring[k]] - g).cross(p[ring[k + 1]] - g);
+  if (ring.size() > 2) n += (p[ring.back()] - g).cross(p[ring.front()] - g);
+  return n;
+}
+
+Vec3 pair_normal(std::span<const int> nb, const std::array<int, 2>& pair, std::span<const Vec3> p,
+                 const Vec3& g) {
+  return (p[nb[pair[0]]] - g).cross(p[nb[pair[1]]] - g);
+}
+
+Vec3 neighbourhood_normal(const ShapeMemory& m, int k, std::span<const Vec3> p, const Vec3& g) {
+  const auto nb = m.neighbours.row(k);
+  return m.surface ? ring_normal(nb, p, g) : pair_normal(nb, m.frame_pair[k], p, g);
+}
+
+// The paper's frame: surface nodes from the normal and the first neighbour, interior
+// nodes by Gram-Schmidt on the rest-time most orthogonal pair of neighbour directions.
+Eigen::Matrix3d local_frame(const ShapeMemory& m, int k, std::span<const Vec3> p, const Vec3& g) {
+  const auto nb = m.neighbours.row(k);
+  Eigen::Matrix3d R;
+  if (m.surface) {
+    const Vec3 n = ring_normal(nb, p, g).normalized();
+    Vec3 e1 = p[nb[0]] - g;
+    e1 = (e1 - e1.dot(n) * n).normalized();
+    R << e1, n.cross(e1), n;
+  } else {
+    const Vec3 e1 = (p[nb[m.frame_pair[k][0]]] - g).normalized();
+    Vec3 u = p[nb[m.frame_pair[k][1]]] - g;
+    const Vec3 e2 = (u - u.dot(e1) * e1).normalized();
+    R << e1, e2, e1.cross(e2);
+  }
+  return R;
+}
+
+// Most orthogonal pair of neighbour directions (largest |sin|), and that sine.
+std::pair<std::array<int, 2>, double> best_pair(std::span<const int> nb, std::span<const Vec3> p,
+                                                const Vec3& g) {
+  std::array<int, 2> best{0, 1};
+  double best_sin = -1.0;
+  for (int a = 0; a < int(nb.size()); ++a) {
+    const Vec3 da = (p[nb[a]] - g).normalized();
+    for (int b = a + 1; b < int(nb.size()); ++b) {
+      const double s = da.cross((p[nb[b]] - g).normalized()).norm();
+      if (s > best_sin + 1e-12) best_sin = s, best = {a, b};
+    }
+  }
+  return {best, best_sin};
+}
+
+Eigen::Matrix3d covariance_about(std::span<const int> nb, std::span<const Vec3> p, const Vec3& g) {
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  for (int j : nb) C += (p[j] - g) * (p[j] - g).transpose();
+  return C;
+}
+
+}  // namespace
+
+namespace {
+
+// Turns q towards the maximiser of trace(R^T A). Near the optimum a Newton step on the
+// symmetry condition skew(R^T A) = 0 (quadratic); elsewhere, or when tr(S) I - S is not
+// positive definite, the step of Mueller et al. (2016) (linear, but always ascending).
+// Returns the angle turned (rad).
+double rotation_iteration(const Eigen::Matrix3d& A, Eigen::Quaterniond& q) {
+  const Eigen::Matrix3d R = q.toRotationMatrix();
+  const Eigen::Matrix3d S = R.transpose() * A;
+  const Vec3 w(0.5 * (S(2, 1) - S(1, 2)), 0.5 * (S(0, 2) - S(2, 0)), 0.5 * (S(1, 0) - S(0, 1)));
+  const Eigen::Matrix3d Ss = 0.5 * (S + S.transpose());
+  const Eigen::Matrix3d M = Ss.trace() * Eigen::Matrix3d::Identity() - Ss;
+  Vec3 theta;  // body-frame turn
+  const Eigen::LLT<Eigen::Matrix3d> llt(M);
+  if (llt.info() == Eigen::Success && M.determinant() > 1e-6 * std::pow(M.trace() / 3.0, 3))
+    theta = 2.0 * llt.solve(w);
+  else
+    theta = 2.0 * w / std::max(std::abs(S.trace()), 1e-300);
+  const double angle = theta.norm();
+  if (angle == 0.0 || !std::isfinite(angle)) return 0.0;
+  q = q * Eigen::Quaterniond(Eigen::AngleAxisd(std::min(angle, 1.0), theta / angle));
+  q.normalize();
+  return angle;
+}
+
+// The proper rotation nearest to A (Kabsch): a cold start far from the warm one.
+Eigen::Quaterniond nearest_rotation(const Eigen::Matrix3d& A) {
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(A, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d U = svd.matrixU();
+  if ((U * svd.matrixV().transpose()).determinant() < 0.0) U.col(2) *= -1.0;
+  return Eigen::Quaterniond(U * svd.matrixV().transpose()).normalized();
+}
+
+// What the polar fit of a neighbourhood needs, computed once per node and step.
+struct Fit {
+  Vec3 g;                 // current centroid of the neighbours
+  Eigen::Matrix3d A;      // sum (x_j - g)(X_j - G0)^T (+ the normal pair)
+  Vec3 N = Vec3::Zero();  // unnormalised current normal of a flat neighbourhood
+};
+
+Fit fit_neighbourhood(const ShapeMemory& m, int k, std::span<const Vec3> rest,
+                      std::span<const Vec3> x) {
+  const auto nb = m.neighbours.row(k);
+  Fit fit;
+  fit.g = centroid(nb, x);
+  fit.A.setZero();
+  const Vec3& G0 = m.rest_centroid[k];
+  for (int j : nb) fit.A += (x[j] - fit.g) * (rest[j] - G0).transpose();
+  if (m.normal_weight[k] > 0.0) {
+    fit.N = neighbourhood_normal(m, k, x, fit.g);
+    fit.A += m.normal_weight[k] * fit.N.normalized() * m.rest_normal[k].transpose();
+  }
+  return fit;
+}
+
+// The part of -dE/dx that flows through the best-fit rotation, E = K |a - x_i|^2 / 2 and
+// a = g + R c. With A = R S (S symmetric), a change dA turns R by
+// theta = 2 (tr(S) I - S)^-1 axial(skew(R^T dA)); its effect on E is carried back to every
+// neighbour that enters A (and to the normal pair of flat neighbourhoods).
+void add_rotation_reaction(const ShapeMemory& m, int k, std::span<const Vec3> rest,
+                           std::span<const Vec3> x, const Fit& fit, const Eigen::Matrix3d& R,
+                           const Vec3& pull, std::span<Vec3> f) {
+  const auto nb = m.neighbours.row(k);
+  Eigen::Matrix3d S = R.transpose() * fit.A;
+  S = 0.5 * (S + S.transpose());
+  const Eigen::Matrix3d M = S.trace() * Eigen::Matrix3d::Identity() - S;
+  const Vec3 p = m.stiffness * m.rest_offset[k].cross(R.transpose() * pull);  // dE = p.theta
+  const Vec3 mu = 2.0 * M.inverse() * p;
+  const Vec3& G0 = m.rest_centroid[k];
+  for (int j : nb) f[j] -= 0.5 * R * mu.cross(rest[j] - G0);
+  if (m.normal_weight[k] <= 0.0) return;
+  // The normal pair: dE = h'.dN, N the unnormalised neighbourhood normal.
+  const Vec3 n = fit.N.normalized();
+  const Vec3 h = 0.5 * m.normal_weight[k] * R * mu.cross(m.rest_normal[k]);
+  const Vec3 hp = (h - n.dot(h) * n) / fit.N.norm();
+  const int count = int(nb.size());
+  if (m.surface) {  // N = sum of e_k x e_k+1 around the ring: the centroid terms cancel
+    for (int r = 0; r < count; ++r) {
+      const Vec3 next = x[nb[(r + 1) % count]] - fit.g;
+      const Vec3 prev = x[nb[(r + count - 1) % count]] - fit.g;
+      f[nb[r]] -= (next - prev).cross(hp);
+    }
+    return;
+  }
+  const int a = nb[m.frame_pair[k][0]], b = nb[m.frame_pair[k][1]];
+  const Vec3 ga = (x[b] - fit.g).cross(hp), gb = hp.cross(x[a] - fit.g);
+  f[a] -= ga;
+  f[b] -= gb;
+  const Vec3 through_centroid = (ga + gb) / double(count);
+  for (int j : nb) f[j] += through_centroid;
+}
+
+}  // namespace
+
+void extract_rotation(const Eigen::Matrix3d& A, Eigen::Quaterniond& q, int max_iterations) {
+  // Converged once a turn is below 1e-14 rad: forces then sit at round-off. A warm start
+  // needs one or two iterations; a start far away restarts from an SVD.
+  for (int it = 0; it < max_iterations; ++it)
+    if (rotation_iteration(A, q) < 1e-14) return;
+  q = nearest_rotation(A);
+  for (int it = 0; it < max_iterations; ++it)
+    if (rotation_iteration(A, q) < 1e-14) return;
+}
+
+ShapeMemory build_shape_memory(const std::string& component, const Mesh& mesh, int first_node,
+                               const MaterialSpec& material, std::span<const Vec3> rest) {
+  ShapeMemory m;
+  m.component = component;
+  m.stiffness = material.stiffness;
+  m.frame = material.frame;
+  m.reaction = material.reaction;
+  m.surface = !mesh.volumetric();
+  const Adjacency local = m.surface ? ordered_one_rings(mesh) : edge_neighbours(mesh);
+  std::vector<int> nb;
+  for (int i = 0; i < local.rows(); ++i) {
+    if (local.row(i).empty()) continue;  // a node no cell uses carries no memory
+    nb.clear();
+    for (int j : local.row(i)) nb.push_back(first_node + j);
+    const Vec3 G0 = centroid(nb, rest);
+    const auto [pair, sine] = nb.size() >= 2 ? best_pair(nb, rest, G0)
+                                             : std::pair<std::array<int, 2>, double>{{0, 0}, 0.0};
+    if (sine < 1e-3)
+      throw std::invalid_argument(fmt::format(
+          "component '{}': node {} has {} neighbour(s), all on one line; local shape memory "
+          "needs at least three neighbours not on a line",
+          component, i, nb.size()));
+    const int k = int(m.nodes.size());
+    m.nodes.push_back(first_node + i);
+    m.neighbours.indices.insert(m.neighbours.indices.end(), nb.begin(), nb.end());
+    m.neighbours.offsets.push_back(int(m.neighbours.indices.size()));
+    m.frame_pair.push_back(pair);
+
+    const Eigen::Matrix3d C = covariance_about(nb, rest, G0);
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
+    const bool flat = eig.eigenvalues()(0) < 1e-2 * eig.eigenvalues()(2);
+    m.normal_weight.push_back(m.surface || flat ? C.trace() / double(nb.size()) : 0.0);
+    m.rest_centroid.push_back(G0);
+    m.rest_normal.push_back(m.normal_weight.back() > 0.0
+                                ? neighbourhood_normal(m, k, rest, G0).normalized()
+                                : Vec3::Zero());
+
+    // In polar mode the rest frame is the identity by construction (A0 is symmetric).
+    const Eigen::Matrix3d R0 =
+        m.frame == FrameMode::frame ? local_frame(m, k, rest, G0) : Eigen::Matrix3d::Identity();
+    m.rest_offset.push_back(R0.transpose() * (rest[first_node + i] - G0));
+  }
+  return m;
+}
+
+Vec3 attraction_position(const ShapeMemory& m, int k, std::span<const Vec3> rest,
+                         std::span<const Vec3> x, Eigen::Quaterniond& q) {
+  if (m.frame == FrameMode::frame) {
+    const Vec3 g = centroid(m.neighbours.row(k), x);
+    return g + local_frame(m, k, x, g) * m.rest_offset[k];
+  }
+  const Fit fit = fit_neighbourhood(m, k, rest, x);
+  extract_rotation(fit.A, q);
+  return fit.g + q.toRotationMatrix() * m.rest_offset[k];
+}
+
+namespace {
+
+// Spreads -f/n over the neighbours: the part of -dE/dx that flows through the centroid g.
+void add_centroid_reaction(std::span<const int> nb, const Vec3& fi, std::span<Vec3> f) {
+  const Vec3 share = fi / double(nb.size());
+  for (int j : nb) f[j] -= share;
+}
+
+double add_polar_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::span<const Vec3> x,
+                        std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f) {
+  double energy = 0.0;
+  for (int k = 0; k < int(m.nodes.size()); ++k) {
+    const int i = m.nodes[k];
+    const Fit fit = fit_neighbourhood(m, k, rest, x);
+    extract_rotation(fit.A, rotations[k]);
+    const Eigen::Matrix3d R = rotations[k].toRotationMatrix();
+    const Vec3 pull = fit.g + R * m.rest_offset[k] - x[i];
+    f[i] += m.stiffness * pull;
+    energy += 0.5 * m.stiffness * pull.squaredNorm();
+    if (!m.reaction) continue;
+    // -dE/dx through g and through R: the forces are then exactly the energy's gradient.
+    add_centroid_reaction(m.neighbours.row(k), m.stiffness * pull, f);
+    add_rotation_reaction(m, k, rest, x, fit, R, pull, f);
+  }
+  return energy;
+}
+
+double add_frame_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::span<const Vec3> x,
+                        std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f) {
+  double energy = 0.0;
+  for (int k = 0; k < int(m.nodes.size()); ++k) {
+    const int i = m.nodes[k];
+    const Vec3 pull = attraction_position(m, k, rest, x, rotations[k]) - x[i];
+    f[i] += m.stiffness * pull;
+    energy += 0.5 * m.stiffness * pull.squaredNorm();
+    if (m.reaction) add_centroid_reaction(m.neighbours.row(k), m.stiffness * pull, f);
+  }
+  return energy;
+}
+
+}  // namespace
+
+double add_shape_memory_forces(const ShapeMemory& m, std::span<const Vec3> rest,
+                               std::span<const Vec3> x, std::span<Eigen::Quaterniond> rotations,
+                               std::span<Vec3> f) {
+  return m.frame == FrameMode::polar ? add_polar_forces(m, rest, x, rotations, f)
+                                     : add_frame_forces(m, rest, x, rotations, f);
+}
+
+}  // namespace phymul

@@ -1,0 +1,619 @@
+#include "io/parameter_table.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+
+namespace phymul::io {
+
+namespace {
+
+Range gt(double min) { return {min, std::nullopt, true, false}; }
+Range ge(double min) { return {min, std::nullopt, false, false}; }
+Range closed(double min, double max) { return {min, max, false, false}; }
+Range open_closed(double min, double max) { return {min, max, true, false}; }
+
+const Condition kBox{"generator", {"box"}};
+const Condition kEllipsoid{"generator", {"ellipsoid"}};
+const Condition kCylinder{"generator", {"cylinder"}};
+const Condition kRound{"generator", {"ellipsoid", "cylinder"}};
+const Condition kVolume{"surface", {"false"}};
+const Condition kDisplacement{"type", {"displacement"}};
+
+const std::vector<Section>& sections() {
+  static const std::vector<Section> table{
+      {"scene", "(top level)", "The keys at the top of a scene file. Only `objects` is required."},
+      {"simulation", "simulation", "Time stepping and solver settings."},
+      {"object", "objects[]", "Each entry of `objects`: one deformable body."},
+      {"mesh", "objects[].mesh", "The generated mesh of an object."},
+      {"material", "objects[].material",
+       "Shape-memory material of an object. Give its `density` or its total `mass`."},
+      {"load", "loads[]", "Each entry of `loads`: a nodal force, the same on every selected node."},
+      {"constraint", "constraints[]",
+       "Each entry of `constraints`: nodes held in place or moved by a prescribed displacement."},
+      {"schedule", "schedule[]",
+       "Each event of `loads[].schedule` and `constraints[].schedule`. Values are linear between "
+       "events, held before the first and after the last."},
+      {"nodes", "nodes",
+       "A node selector (`nodes:` of loads and constraints) is one of: omitted (all nodes), a "
+       "node-set name of the generated mesh (`top`), an index list (`\"0-3,7\"`, `7`), a YAML "
+       "list of indices (`[0, 1, 5]`), or a map naming exactly one of the shapes below."},
+      {"box", "nodes.box", "Nodes inside an axis-aligned box."},
+      {"sphere", "nodes.sphere", "Nodes inside a sphere."},
+      {"half_space", "nodes.half_space", "Nodes x with (x - point) . normal >= 0."},
+      {"output", "output", "What is written while the simulation runs."},
+  };
+  return table;
+}
+
+std::vector<Parameter> scene_parameters() {
+  return {
+      {.section = "scene",
+       .name = "simulation",
+       .kind = Kind::map,
+       .default_note = "defaults",
+       .child = "simulation",
+       .doc = "Time stepping and solver settings."},
+      {.section = "scene",
+       .name = "objects",
+       .kind = Kind::list,
+       .range = ge(1),
+       .required = true,
+       .child = "object",
+       .doc = "The deformable bodies."},
+      {.section = "scene",
+       .name = "loads",
+       .kind = Kind::list,
+       .default_note = "none",
+       .child = "load",
+       .doc = "Applied nodal forces."},
+      {.section = "scene",
+       .name = "constraints",
+       .kind = Kind::list,
+       .default_note = "none",
+       .child = "constraint",
+       .doc = "Fixed and prescribed-displacement nodes."},
+      {.section = "scene",
+       .name = "output",
+       .kind = Kind::map,
+       .default_note = "defaults",
+       .child = "output",
+       .doc = "Output settings."},
+  };
+}
+
+std::vector<Parameter> simulation_parameters() {
+  return {
+      {.section = "simulation",
+       .name = "dt",
+       .kind = Kind::quantity,
+       .dimension = Dimension::time,
+       .range = gt(0),
+       .default_value = "auto",
+       .keyword = "auto",
+       .doc = "Time step; `auto` takes dt_safety times the stability limit."},
+      {.section = "simulation",
+       .name = "dt_safety",
+       .kind = Kind::quantity,
+       .range = open_closed(0, 1),
+       .default_value = "0.5",
+       .doc = "Fraction of the stability limit used by `dt: auto`."},
+      {.section = "simulation",
+       .name = "duration",
+       .kind = Kind::quantity,
+       .dimension = Dimension::time,
+       .range = gt(0),
+       .default_value = "1",
+       .doc = "Simulated time; static mode evaluates the schedules at its end."},
+      {.section = "simulation",
+       .name = "integrator",
+       .kind = Kind::choice,
+       .choices = {"verlet", "newton-cotes"},
+       .default_value = "verlet",
+       .doc = "Time integration scheme."},
+      {.section = "simulation",
+       .name = "mode",
+       .kind = Kind::choice,
+       .choices = {"dynamic", "static"},
+       .default_value = "dynamic",
+       .doc = "`dynamic`: motion over time; `static`: equilibria by damped relaxation."},
+      {.section = "simulation",
+       .name = "gravity",
+       .kind = Kind::vector,
+       .dimension = Dimension::acceleration,
+       .default_value = "[0, 0, 0]",
+       .doc = "Gravitational acceleration."},
+      {.section = "simulation",
+       .name = "damping",
+       .kind = Kind::quantity,
+       .dimension = Dimension::rate,
+       .range = ge(0),
+       .default_value = "0",
+       .doc = "Mass-proportional viscous damping."},
+      {.section = "simulation",
+       .name = "tolerance",
+       .kind = Kind::quantity,
+       .dimension = Dimension::force,
+       .range = gt(0),
+       .default_value = "1e-6",
+       .doc = "Static mode: converged when the largest residual nodal force is below it."},
+      {.section = "simulation",
+       .name = "max_iterations",
+       .kind = Kind::integer,
+       .range = ge(1),
+       .default_value = "1000000",
+       .doc = "Static mode: iteration limit."},
+      {.section = "simulation",
+       .name = "load_steps",
+       .kind = Kind::integer,
+       .range = closed(1, 1e6),
+       .default_value = "1",
+       .doc = "Static mode: equilibria at duration * k / load_steps, k = 1..load_steps."},
+      {.section = "simulation",
+       .name = "kinetic_damping",
+       .kind = Kind::boolean,
+       .default_value = "true",
+       .doc = "Static mode: zero the velocities at kinetic-energy peaks."},
+  };
+}
+
+std::vector<Parameter> object_parameters() {
+  return {
+      {.section = "object",
+       .name = "name",
+       .kind = Kind::name,
+       .required = true,
+       .doc = "Unique name (letters, digits, `_`, `-`); loads and constraints refer to it."},
+      {.section = "object",
+       .name = "mesh",
+       .kind = Kind::map,
+       .required = true,
+       .child = "mesh",
+       .doc = "The generated mesh."},
+      {.section = "object",
+       .name = "material",
+       .kind = Kind::map,
+       .required = true,
+       .child = "material",
+       .doc = "The material."},
+      {.section = "object",
+       .name = "volume_constraint",
+       .kind = Kind::boolean,
+       .default_value = "false",
+       .doc = "Keep the volume enclosed by the boundary surface."},
+  };
+}
+
+std::vector<Parameter> mesh_parameters() {
+  return {
+      {.section = "mesh",
+       .name = "generator",
+       .kind = Kind::choice,
+       .choices = {"box", "ellipsoid", "cylinder"},
+       .required = true,
+       .doc = "Which mesh generator builds the object."},
+      {.section = "mesh",
+       .name = "element",
+       .kind = Kind::choice,
+       .choices = {"hexa", "tetra"},
+       .default_value = "hexa",
+       .when = {kBox},
+       .doc = "Box cells: hexahedra, or each hexahedron split into 6 tetrahedra."},
+      {.section = "mesh",
+       .name = "size",
+       .kind = Kind::vector,
+       .dimension = Dimension::length,
+       .range = gt(0),
+       .default_value = "[0.01, 0.01, 0.01]",
+       .when = {kBox},
+       .doc = "Box edge lengths along x, y, z."},
+      {.section = "mesh",
+       .name = "cells",
+       .kind = Kind::integer_vector,
+       .range = closed(1, 1000),
+       .default_value = "[4, 4, 4]",
+       .when = {kBox},
+       .doc = "Box cells along x, y, z."},
+      {.section = "mesh",
+       .name = "radii",
+       .kind = Kind::vector,
+       .dimension = Dimension::length,
+       .range = gt(0),
+       .default_value = "[0.01, 0.01, 0.01]",
+       .when = {kEllipsoid},
+       .doc = "Ellipsoid semi-axes along x, y, z."},
+      {.section = "mesh",
+       .name = "subdivisions",
+       .kind = Kind::integer,
+       .range = closed(0, 7),
+       .default_value = "2",
+       .when = {kEllipsoid},
+       .doc = "Icosahedron subdivisions: 20 * 4^s surface triangles."},
+      {.section = "mesh",
+       .name = "layers",
+       .kind = Kind::integer,
+       .range = closed(1, 100),
+       .default_value = "3",
+       .when = {kEllipsoid, kVolume},
+       .doc = "Ellipsoid volume: concentric shells from the centre to the surface."},
+      {.section = "mesh",
+       .name = "radius",
+       .kind = Kind::quantity,
+       .dimension = Dimension::length,
+       .range = gt(0),
+       .default_value = "0.01",
+       .when = {kCylinder},
+       .doc = "Cylinder radius."},
+      {.section = "mesh",
+       .name = "length",
+       .kind = Kind::quantity,
+       .dimension = Dimension::length,
+       .range = gt(0),
+       .default_value = "0.02",
+       .when = {kCylinder},
+       .doc = "Cylinder length along z."},
+      {.section = "mesh",
+       .name = "around",
+       .kind = Kind::integer,
+       .range = closed(3, 1000),
+       .default_value = "16",
+       .when = {kCylinder},
+       .doc = "Cylinder nodes per ring."},
+      {.section = "mesh",
+       .name = "along",
+       .kind = Kind::integer,
+       .range = closed(1, 1000),
+       .default_value = "4",
+       .when = {kCylinder},
+       .doc = "Cylinder cell layers along z."},
+      {.section = "mesh",
+       .name = "rings",
+       .kind = Kind::integer,
+       .range = closed(1, 100),
+       .default_value = "2",
+       .when = {kCylinder, kVolume},
+       .doc = "Cylinder volume: rings of the triangulated disk extruded along z."},
+      {.section = "mesh",
+       .name = "surface",
+       .kind = Kind::boolean,
+       .default_value = "false",
+       .when = {kRound},
+       .doc = "Generate a closed surface mesh instead of a volume mesh."},
+      {.section = "mesh",
+       .name = "center",
+       .kind = Kind::vector,
+       .dimension = Dimension::length,
+       .default_value = "[0, 0, 0]",
+       .doc = "Centre of the generated mesh."},
+  };
+}
+
+std::vector<Parameter> material_parameters() {
+  return {
+      {.section = "material",
+       .name = "stiffness",
+       .kind = Kind::quantity,
+       .dimension = Dimension::stiffness,
+       .range = gt(0),
+       .required = true,
+       .doc = "Shape-memory spring of each node."},
+      {.section = "material",
+       .name = "density",
+       .kind = Kind::quantity,
+       .dimension = Dimension::density,
+       .range = gt(0),
+       .one_of = "mass",
+       .doc = "Mass density; volumetric meshes only."},
+      {.section = "material",
+       .name = "mass",
+       .kind = Kind::quantity,
+       .dimension = Dimension::mass,
+       .range = gt(0),
+       .one_of = "mass",
+       .doc = "Total mass, spread over the nodes by lumped cell measure."},
+      {.section = "material",
+       .name = "frame",
+       .kind = Kind::choice,
+       .choices = {"polar", "frame"},
+       .default_value = "polar",
+       .doc = "How the local rotation of the rest shape is estimated."},
+      {.section = "material",
+       .name = "reaction",
+       .kind = Kind::boolean,
+       .default_value = "true",
+       .doc = "Apply -f/n to the neighbours of each node, so that momentum is kept."},
+  };
+}
+
+std::vector<Parameter> load_parameters() {
+  return {
+      {.section = "load",
+       .name = "type",
+       .kind = Kind::choice,
+       .choices = {"force"},
+       .required = true,
+       .doc = "Kind of load."},
+      {.section = "load",
+       .name = "object",
+       .kind = Kind::name,
+       .required = true,
+       .doc = "Name of the loaded object."},
+      {.section = "load",
+       .name = "nodes",
+       .kind = Kind::selector,
+       .default_note = "all nodes",
+       .doc = "The loaded nodes (node selector)."},
+      {.section = "load",
+       .name = "force",
+       .kind = Kind::vector,
+       .dimension = Dimension::force,
+       .one_of = "value",
+       .doc = "Constant force on each selected node."},
+      {.section = "load",
+       .name = "schedule",
+       .kind = Kind::schedule,
+       .dimension = Dimension::force,
+       .one_of = "value",
+       .doc = "Force on each selected node over time: a list of {t, value} events."},
+  };
+}
+
+std::vector<Parameter> constraint_parameters() {
+  return {
+      {.section = "constraint",
+       .name = "type",
+       .kind = Kind::choice,
+       .choices = {"fixed", "displacement"},
+       .required = true,
+       .doc = "`fixed`: held at the rest position; `displacement`: moved as prescribed."},
+      {.section = "constraint",
+       .name = "object",
+       .kind = Kind::name,
+       .required = true,
+       .doc = "Name of the constrained object."},
+      {.section = "constraint",
+       .name = "nodes",
+       .kind = Kind::selector,
+       .default_note = "all nodes",
+       .doc = "The constrained nodes (node selector)."},
+      {.section = "constraint",
+       .name = "axes",
+       .kind = Kind::axes,
+       .default_value = "xyz",
+       .when = {kDisplacement},
+       .doc = "The prescribed axes: a non-empty combination of x, y, z."},
+      {.section = "constraint",
+       .name = "displacement",
+       .kind = Kind::vector,
+       .dimension = Dimension::length,
+       .when = {kDisplacement},
+       .one_of = "value",
+       .doc = "Constant displacement from the rest position."},
+      {.section = "constraint",
+       .name = "schedule",
+       .kind = Kind::schedule,
+       .dimension = Dimension::length,
+       .when = {kDisplacement},
+       .one_of = "value",
+       .doc = "Displacement over time: a list of {t, value} events."},
+  };
+}
+
+std::vector<Parameter> schedule_parameters() {
+  return {
+      {.section = "schedule",
+       .name = "t",
+       .kind = Kind::quantity,
+       .dimension = Dimension::time,
+       .range = ge(0),
+       .required = true,
+       .doc = "Event time; strictly increasing along the schedule."},
+      {.section = "schedule",
+       .name = "value",
+       .kind = Kind::vector,
+       .required = true,
+       .doc = "Value at t, in the unit of the scheduled field (N for a force, m for a "
+              "displacement)."},
+  };
+}
+
+std::vector<Parameter> selector_parameters() {
+  return {
+      {.section = "nodes",
+       .name = "box",
+       .kind = Kind::map,
+       .one_of = "shape",
+       .child = "box",
+       .doc = "Axis-aligned box."},
+      {.section = "nodes",
+       .name = "sphere",
+       .kind = Kind::map,
+       .one_of = "shape",
+       .child = "sphere",
+       .doc = "Sphere."},
+      {.section = "nodes",
+       .name = "half_space",
+       .kind = Kind::map,
+       .one_of = "shape",
+       .child = "half_space",
+       .doc = "Half-space bounded by a plane."},
+      {.section = "box",
+       .name = "min",
+       .kind = Kind::vector,
+       .dimension = Dimension::length,
+       .required = true,
+       .doc = "Lower corner."},
+      {.section = "box",
+       .name = "max",
+       .kind = Kind::vector,
+       .dimension = Dimension::length,
+       .required = true,
+       .doc = "Upper corner, componentwise >= min."},
+      {.section = "sphere",
+       .name = "center",
+       .kind = Kind::vector,
+       .dimension = Dimension::length,
+       .required = true,
+       .doc = "Centre."},
+      {.section = "sphere",
+       .name = "radius",
+       .kind = Kind::quantity,
+       .dimension = Dimension::length,
+       .range = gt(0),
+       .required = true,
+       .doc = "Radius."},
+      {.section = "half_space",
+       .name = "point",
+       .kind = Kind::vector,
+       .dimension = Dimension::length,
+       .required = true,
+       .doc = "A point on the plane."},
+      {.section = "half_space",
+       .name = "normal",
+       .kind = Kind::vector,
+       .required = true,
+       .doc = "Direction into the selected side; any non-zero length, stored normalised."},
+  };
+}
+
+std::vector<Parameter> output_parameters() {
+  return {
+      {.section = "output",
+       .name = "interval",
+       .kind = Kind::quantity,
+       .dimension = Dimension::time,
+       .range = ge(0),
+       .default_value = "0",
+       .doc = "Time between frames (dynamic mode); 0 writes the first and last frame only."},
+      {.section = "output",
+       .name = "vtk",
+       .kind = Kind::boolean,
+       .default_value = "true",
+       .doc = "Write VTK files."},
+  };
+}
+
+const std::vector<Parameter>& parameters() {
+  static const std::vector<Parameter> table = [] {
+    std::vector<Parameter> all;
+    for (auto part :
+         {scene_parameters(), simulation_parameters(), object_parameters(), mesh_parameters(),
+          material_parameters(), load_parameters(), constraint_parameters(), schedule_parameters(),
+          selector_parameters(), output_parameters()})
+      all.insert(all.end(), part.begin(), part.end());
+    return all;
+  }();
+  return table;
+}
+
+std::string lower(std::string_view s) {
+  std::string out(s);
+  for (char& c : out) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+}  // namespace
+
+std::string Range::violation(double value, Dimension dimension) const {
+  if (min && (min_open ? !(value > *min) : !(value >= *min)))
+    return fmt::format("{} {}", min_open ? ">" : ">=", format_si(*min, dimension));
+  if (max && (max_open ? !(value < *max) : !(value <= *max)))
+    return fmt::format("{} {}", max_open ? "<" : "<=", format_si(*max, dimension));
+  return {};
+}
+
+std::string Range::str() const {
+  if (min && max)
+    return fmt::format("{}{}, {}{}", min_open ? '(' : '[', *min, *max, max_open ? ')' : ']');
+  if (min) return fmt::format("{} {}", min_open ? ">" : ">=", *min);
+  if (max) return fmt::format("{} {}", max_open ? "<" : "<=", *max);
+  return {};
+}
+
+std::span<const Section> section_table() { return sections(); }
+std::span<const Parameter> parameter_table() { return parameters(); }
+
+const Section* find_section(std::string_view name) {
+  for (const auto& section : sections())
+    if (section.name == name) return &section;
+  return nullptr;
+}
+
+const Parameter* find_parameter(std::string_view section, std::string_view name) {
+  for (const auto& parameter : parameters())
+    if (parameter.section == section && parameter.name == name) return &parameter;
+  return nullptr;
+}
+
+std::vector<const Parameter*> section_parameters(std::string_view section) {
+  std::vector<const Parameter*> out;
+  for (const auto& parameter : parameters())
+    if (parameter.section == section) out.push_back(&parameter);
+  return out;
+}
+
+std::string_view kind_name(Kind kind) {
+  switch (kind) {
+    case Kind::quantity:
+      return "quantity";
+    case Kind::vector:
+      return "vector";
+    case Kind::integer:
+      return "integer";
+    case Kind::integer_vector:
+      return "3 integers";
+    case Kind::boolean:
+      return "boolean";
+    case Kind::choice:
+      return "enum";
+    case Kind::name:
+      return "name";
+    case Kind::axes:
+      return "axes";
+    case Kind::selector:
+      return "node selector";
+    case Kind::schedule:
+      return "schedule";
+    case Kind::list:
+      return "list of maps";
+    case Kind::map:
+      return "map";
+  }
+  return "?";
+}
+
+int edit_distance(std::string_view a, std::string_view b) {
+  const size_t n = a.size(), m = b.size();
+  std::vector<std::vector<int>> d(n + 1, std::vector<int>(m + 1));
+  for (size_t i = 0; i <= n; ++i) d[i][0] = int(i);
+  for (size_t j = 0; j <= m; ++j) d[0][j] = int(j);
+  for (size_t i = 1; i <= n; ++i) {
+    for (size_t j = 1; j <= m; ++j) {
+      const int cost = a[i - 1] == b[j - 1] ? 0 : 1;
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);  // transposition
+    }
+  }
+  return d[n][m];
+}
+
+std::optional<std::string_view> closest_match(std::string_view word,
+                                              std::span<const std::string_view> candidates) {
+  // Short words tolerate fewer edits, or every two-letter key would suggest every other.
+  const int limit = word.size() <= 3 ? 1 : word.size() <= 6 ? 2 : 3;
+  const std::string folded = lower(word);
+  std::optional<std::string_view> best;
+  int best_distance = limit + 1;
+  for (const auto candidate : candidates) {
+    const int distance = edit_distance(folded, lower(candidate));
+    if (distance < best_distance) {
+      best = candidate;
+      best_distance = distance;
+    }
+  }
+  return best;
+}
+
+}  // namespace phymul::io

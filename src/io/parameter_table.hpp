@@ -1,0 +1,86 @@
+// The scene parameter table: every section and field of a scene file, as data. The reader
+// validates against it, its messages quote it and scene_reference_markdown() prints it, so a
+// field documented is a field checked.
+#pragma once
+
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "io/units.hpp"
+
+namespace phymul::io {
+
+enum class Kind {
+  quantity,        // number with an optional unit of `dimension`
+  vector,          // [x, y, z] of quantities, each with its own optional unit
+  integer,         // whole number
+  integer_vector,  // [x, y, z] of whole numbers
+  boolean,         // true | false
+  choice,          // one of `choices`
+  name,            // [A-Za-z0-9_-]+
+  axes,            // non-empty combination of x, y, z
+  selector,        // node selector: name, index list or {box|sphere|half_space: ...}
+  schedule,        // list of {t, value} events
+  list,            // list of maps, each described by section `child`
+  map,             // map described by section `child`
+};
+
+// Allowed interval, applied to each component of vectors and to the entry count of lists.
+struct Range {
+  std::optional<double> min, max;
+  bool min_open = false, max_open = false;
+
+  bool unbounded() const { return !min && !max; }
+  // The violated bound as a message fragment ("> 0 kg/m^3"), or "" when `value` is inside.
+  std::string violation(double value, Dimension dimension) const;
+  std::string str() const;  // "(0, 1]", ">= 1", "[1, 1000]"
+};
+
+// The field exists only when the sibling field `key` holds one of `values`.
+struct Condition {
+  std::string_view key;
+  std::vector<std::string_view> values;
+};
+
+struct Parameter {
+  std::string_view section;
+  std::string_view name;
+  Kind kind;
+  Dimension dimension = Dimension::none;
+  Range range{};
+  std::vector<std::string_view> choices{};
+  std::string_view default_value{};  // YAML text used when the key is absent; "" = none
+  std::string_view default_note{};   // reference text when absence means something else
+  bool required = false;
+  std::string_view keyword{};     // a word accepted instead of a value ("auto")
+  std::vector<Condition> when{};  // all must hold for the field to exist
+  std::string_view one_of{};      // group name: exactly one field of the group is given
+  std::string_view child{};       // map and list: the section of the content
+  std::string_view doc{};
+};
+
+struct Section {
+  std::string_view name;  // as used in Parameter::section
+  std::string_view path;  // where it sits in a scene file, for the reference
+  std::string_view doc;
+};
+
+std::span<const Section> section_table();
+std::span<const Parameter> parameter_table();
+
+const Section* find_section(std::string_view name);
+const Parameter* find_parameter(std::string_view section, std::string_view name);
+std::vector<const Parameter*> section_parameters(std::string_view section);
+
+std::string_view kind_name(Kind kind);
+
+// Damerau-Levenshtein (optimal string alignment) distance, for did-you-mean suggestions.
+int edit_distance(std::string_view a, std::string_view b);
+// The candidate closest to `word` when it is close enough to be a likely typo.
+std::optional<std::string_view> closest_match(std::string_view word,
+                                              std::span<const std::string_view> candidates);
+
+}  // namespace phymul::io

@@ -1,0 +1,93 @@
+#include "io/results.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace phymul {
+namespace {
+
+std::string json_number(double v) { return std::isfinite(v) ? fmt::format("{}", v) : "null"; }
+
+std::string json_string(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\')
+      out += '\\', out += c;
+    else if (c == '\n')
+      out += "\\n";
+    else if (static_cast<unsigned char>(c) < 0x20)
+      out += fmt::format("\\u{:04x}", int(c));
+    else
+      out += c;
+  }
+  return out + "\"";
+}
+
+}  // namespace
+
+ResultWriter::ResultWriter(std::filesystem::path dir, std::string stem, const Model& model,
+                           bool vtk)
+    : dir_(std::move(dir)), stem_(std::move(stem)), vtk_(vtk) {
+  for (int c = 0; c < int(model.components.size()); ++c)
+    if (!model.components[c].boundary.empty()) closed_components_.push_back(c);
+  const auto path = dir_ / "monitors.csv.tmp";
+  monitors_.open(path);
+  if (!monitors_) throw std::runtime_error(fmt::format("cannot write {}", path.string()));
+  monitors_ << "time_s,kinetic_energy_J,shape_memory_energy_J,max_residual_force_N";
+  for (int c : closed_components_) monitors_ << ",volume_" << model.components[c].name << "_m3";
+  monitors_ << '\n';
+  const size_t n = model.rest_position.size() * 3;
+  displacement_.resize(n);
+  velocity_.resize(n);
+  force_.resize(n);
+}
+
+void ResultWriter::frame(Simulator& sim) {
+  if (!vtk_) return;
+  const Model& m = sim.model();
+  const State& s = sim.state();
+  for (int i = 0; i < m.node_count(); ++i)
+    for (int a = 0; a < 3; ++a) {
+      displacement_[3 * i + a] = s.x[i][a] - m.rest_position[i][a];
+      velocity_[3 * i + a] = s.v[i][a];
+      force_[3 * i + a] = s.f[i][a];
+    }
+  const PointField points[] = {
+      {"displacement", 3, displacement_}, {"velocity", 3, velocity_}, {"force", 3, force_}};
+  const CellField cells[] = {{"component", m.cell_component}};
+  const std::string name = fmt::format("{}_{:06d}.vtu", stem_, pvd_.size());
+  write_vtu(dir_ / name, s.x, m.cells, points, cells);
+  pvd_.push_back({s.time, name});
+  write_pvd(dir_ / (stem_ + ".pvd"), pvd_);
+}
+
+void ResultWriter::monitor(Simulator& sim) {
+  const std::vector<double> volumes = sim.component_volumes();
+  monitors_ << fmt::format("{},{},{},{}", sim.state().time, sim.kinetic_energy(),
+                           sim.state().shape_memory_energy, sim.max_residual_force());
+  for (int c : closed_components_) monitors_ << ',' << fmt::format("{}", volumes[c]);
+  monitors_ << '\n';
+}
+
+void ResultWriter::finish(const RunReport& report) {
+  monitors_.close();
+  if (!monitors_) throw std::runtime_error("cannot finish monitors.csv in " + dir_.string());
+  std::filesystem::rename(dir_ / "monitors.csv.tmp", dir_ / "monitors.csv");
+  write_file_atomically(dir_ / "report.json", [&](std::ostream& o) { o << report_json(report); });
+}
+
+std::string report_json(const RunReport& r) {
+  return fmt::format(
+      "{{\n  \"status\": {},\n  \"message\": {},\n  \"steps\": {},\n  \"simulated_time_s\": {},\n"
+      "  \"wall_time_s\": {},\n  \"ns_per_node_per_step\": {},\n  \"dt_s\": {},\n"
+      "  \"stable_dt_s\": {},\n  \"nodes\": {},\n  \"frames\": {},\n  \"converged\": {},\n"
+      "  \"final_residual_force_N\": {}\n}}\n",
+      json_string(r.status), json_string(r.message), r.steps, json_number(r.simulated_time),
+      json_number(r.wall_time), json_number(r.ns_per_node_per_step), json_number(r.dt),
+      json_number(r.stable_dt), r.nodes, r.frames, r.converged ? "true" : "false",
+      json_number(r.residual));
+}
+
+}  // namespace phymul

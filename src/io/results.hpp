@@ -1,0 +1,36 @@
+// The files of a run: frames (.vtu and the .pvd listing them), monitors.csv, report.json.
+#pragma once
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "phymul/run.hpp"
+#include "phymul/simulator.hpp"
+#include "phymul/vtk.hpp"
+
+namespace phymul {
+
+class ResultWriter {
+ public:
+  ResultWriter(std::filesystem::path dir, std::string stem, const Model& model, bool vtk);
+  void frame(Simulator& sim);            // one .vtu, and the .pvd rewritten to list it
+  void monitor(Simulator& sim);          // one row of monitors.csv
+  void finish(const RunReport& report);  // monitors.csv complete, report.json
+  int frames() const { return int(pvd_.size()); }
+
+ private:
+  std::filesystem::path dir_;
+  std::string stem_;
+  bool vtk_;
+  std::vector<int> closed_components_;
+  std::vector<PvdEntry> pvd_;
+  std::ofstream monitors_;
+  std::vector<double> displacement_, velocity_, force_;  // flat xyz buffers for the writer
+};
+
+// report.json's text (JSON; non-finite numbers become null).
+std::string report_json(const RunReport& report);
+
+}  // namespace phymul

@@ -1,0 +1,376 @@
+// Scene files: YAML text -> Scene, checked field by field against the parameter table.
+#include "phymul/scene.hpp"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <yaml-cpp/depthguard.h>
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <sstream>
+
+#include "io/parameter_table.hpp"
+#include "io/scene_reader.hpp"
+
+namespace phymul {
+
+namespace {
+
+using io::SceneContext;
+using io::SectionReader;
+
+// A scene is a few kilobytes; refusing huge files keeps a wrong path from eating memory.
+constexpr std::uintmax_t kMaxSceneBytes = 64u << 20;
+
+std::string join_lines(const std::vector<Diagnostic>& diagnostics) {
+  std::string out;
+  for (const auto& diagnostic : diagnostics) {
+    if (!out.empty()) out += '\n';
+    out += diagnostic.str();
+  }
+  return out;
+}
+
+// Length of the UTF-8 sequence at text[i], 0 when it is not valid UTF-8 (overlong forms
+// and surrogates included).
+size_t utf8_length(const std::string& text, size_t i) {
+  const auto byte = [&](size_t k) { return static_cast<unsigned char>(text[k]); };
+  const unsigned char c = byte(i);
+  if (c < 0x80) return 1;
+  size_t length = 0;
+  unsigned char low = 0x80, high = 0xBF;  // allowed range of the second byte
+  if (c >= 0xC2 && c <= 0xDF) {
+    length = 2;
+  } else if (c >= 0xE0 && c <= 0xEF) {
+    length = 3;
+    if (c == 0xE0) low = 0xA0;
+    if (c == 0xED) high = 0x9F;
+  } else if (c >= 0xF0 && c <= 0xF4) {
+    length = 4;
+    if (c == 0xF0) low = 0x90;
+    if (c == 0xF4) high = 0x8F;
+  } else {
+    return 0;
+  }
+  if (i + length > text.size()) return 0;
+  if (byte(i + 1) < low || byte(i + 1) > high) return 0;
+  for (size_t k = 2; k < length; ++k)
+    if ((byte(i + k) & 0xC0) != 0x80) return 0;
+  return length;
+}
+
+// yaml-cpp accepts or garbles NUL bytes, control characters and invalid UTF-8; a binary
+// file deserves one clear message instead.
+bool check_text(SceneContext& context, const std::string& text) {
+  int line = 1, column = 1;
+  for (size_t i = 0; i < text.size();) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    const size_t length = utf8_length(text, i);
+    const bool control = c < 0x20 && c != '\t' && c != '\n' && c != '\r';
+    if (length == 0 || control || c == 0x7F) {
+      context.error(
+          {context.file(), line, column},
+          fmt::format("scene file is not YAML text (byte 0x{:02x}{}); is it a binary file?", c,
+                      length == 0 ? " is not valid UTF-8" : " is a control character"));
+      return false;
+    }
+    if (c == '\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+    i += length;
+  }
+  return true;
+}
+
+std::string top_level_keys() {
+  std::string keys;
+  for (const auto* parameter : io::section_parameters("scene"))
+    keys += fmt::format("{}{}:", keys.empty() ? "" : ", ", parameter->name);
+  return keys;
+}
+
+std::optional<YAML::Node> load_yaml(SceneContext& context, const std::string& text) {
+  if (!check_text(context, text)) return std::nullopt;
+  std::vector<YAML::Node> documents;
+  try {
+    documents = YAML::LoadAll(text);
+  } catch (const YAML::DeepRecursion& e) {
+    context.error(context.loc(e.mark), "YAML nesting is too deep");
+    return std::nullopt;
+  } catch (const YAML::Exception& e) {
+    context.error(context.loc(e.mark), fmt::format("YAML syntax error: {}", e.msg));
+    return std::nullopt;
+  }
+  if (documents.empty() || (documents.size() == 1 && documents[0].IsNull())) {
+    context.error({context.file(), 0, 0},
+                  fmt::format("scene file is empty (expected a map with {})", top_level_keys()));
+    return std::nullopt;
+  }
+  if (documents.size() > 1) {
+    context.error(
+        context.loc(documents[1]),
+        fmt::format("scene file holds {} YAML documents; it must hold one", documents.size()));
+    return std::nullopt;
+  }
+  if (!documents[0].IsMap()) {
+    context.error(context.loc(documents[0]),
+                  fmt::format("the top level of a scene must be a map with {} (got {})",
+                              top_level_keys(), io::describe_node(documents[0])));
+    return std::nullopt;
+  }
+  return documents[0];
+}
+
+// Fills the Scene structs from checked sections, and remembers object names and the
+// references to them for the cross-checks that need the whole file.
+class SceneBuilder {
+ public:
+  explicit SceneBuilder(SceneContext& context) : context_(context) {}
+
+  Scene build(const YAML::Node& root, const std::string& file);
+
+ private:
+  struct Named {  // an object name or a reference to one, where it was written
+    std::string name;
+    SourceLoc loc;
+    std::string where;
+  };
+
+  SimulationSpec simulation(SectionReader& reader);
+  ObjectSpec object(SectionReader& reader);
+  MeshSpec mesh(SectionReader& reader);
+  MaterialSpec material(SectionReader& reader);
+  LoadSpec load(SectionReader& reader);
+  ConstraintSpec constraint(SectionReader& reader);
+  OutputSpec output(SectionReader& reader);
+  void refer(SectionReader& reader, std::string& object);
+  void check_names();
+  void check_references();
+
+  SceneContext& context_;
+  std::vector<Named> names_;
+  std::vector<Named> references_;
+  size_t objects_ = 0;  // including those whose name is invalid
+};
+
+Scene SceneBuilder::build(const YAML::Node& root, const std::string& file) {
+  Scene scene;
+  scene.file = file;
+  SectionReader top(context_, root, "scene", "the top level", context_.loc(root));
+  if (auto reader = top.map("simulation")) scene.simulation = simulation(*reader);
+  top.items("objects", [&](SectionReader& r) { scene.objects.push_back(object(r)); });
+  objects_ = scene.objects.size();
+  top.items("loads", [&](SectionReader& r) { scene.loads.push_back(load(r)); });
+  top.items("constraints", [&](SectionReader& r) { scene.constraints.push_back(constraint(r)); });
+  if (auto reader = top.map("output")) scene.output = output(*reader);
+  top.done();
+  check_names();
+  check_references();
+  return scene;
+}
+
+SimulationSpec SceneBuilder::simulation(SectionReader& reader) {
+  SimulationSpec spec;
+  spec.loc = reader.loc();
+  reader.read("dt", spec.dt);
+  reader.read("dt_safety", spec.dt_safety);
+  reader.read("duration", spec.duration);
+  reader.read("integrator", spec.integrator,
+              {{"verlet", Integrator::verlet}, {"newton-cotes", Integrator::newton_cotes}});
+  reader.read("mode", spec.mode,
+              {{"dynamic", SolveMode::dynamic}, {"static", SolveMode::static_equilibrium}});
+  reader.read("gravity", spec.gravity);
+  reader.read("damping", spec.damping);
+  reader.read("tolerance", spec.tolerance);
+  reader.read("max_iterations", spec.max_iterations);
+  reader.read("load_steps", spec.load_steps);
+  reader.read("kinetic_damping", spec.kinetic_damping);
+  reader.done();
+  return spec;
+}
+
+ObjectSpec SceneBuilder::object(SectionReader& reader) {
+  ObjectSpec spec;
+  spec.loc = reader.loc();
+  if (reader.read("name", spec.name))
+    names_.push_back({spec.name, *reader.value_loc("name"), reader.where()});
+  if (auto mesh_reader = reader.map("mesh")) spec.mesh = mesh(*mesh_reader);
+  if (auto material_reader = reader.map("material")) spec.material = material(*material_reader);
+  reader.read("volume_constraint", spec.volume_constraint);
+  reader.done();
+  return spec;
+}
+
+MeshSpec SceneBuilder::mesh(SectionReader& reader) {
+  MeshSpec spec;
+  spec.loc = reader.loc();
+  reader.read("generator", spec.generator);
+  reader.read("element", spec.element, {{"hexa", CellType::hexa}, {"tetra", CellType::tetra}});
+  reader.read("surface", spec.surface);
+  reader.read("size", spec.size);
+  reader.read("cells", spec.cells);
+  reader.read("radii", spec.radii);
+  reader.read("subdivisions", spec.subdivisions);
+  reader.read("layers", spec.layers);
+  reader.read("radius", spec.radius);
+  reader.read("length", spec.length);
+  reader.read("around", spec.around);
+  reader.read("along", spec.along);
+  reader.read("rings", spec.rings);
+  reader.read("center", spec.center);
+  reader.done();
+  return spec;
+}
+
+MaterialSpec SceneBuilder::material(SectionReader& reader) {
+  MaterialSpec spec;
+  spec.loc = reader.loc();
+  reader.read("stiffness", spec.stiffness);
+  reader.read("density", spec.density);
+  reader.read("mass", spec.mass);
+  reader.read("frame", spec.frame, {{"polar", FrameMode::polar}, {"frame", FrameMode::frame}});
+  reader.read("reaction", spec.reaction);
+  reader.done();
+  return spec;
+}
+
+void SceneBuilder::refer(SectionReader& reader, std::string& object) {
+  if (reader.read("object", object))
+    references_.push_back({object, *reader.value_loc("object"), reader.where()});
+}
+
+LoadSpec SceneBuilder::load(SectionReader& reader) {
+  LoadSpec spec;
+  spec.loc = reader.loc();
+  std::string type;
+  reader.read("type", type);  // "force" is the only kind; the table refuses others
+  refer(reader, spec.object);
+  reader.read("nodes", spec.nodes);
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();
+  if (reader.read("force", force)) spec.force = Schedule::constant(force);
+  reader.read("schedule", spec.force);
+  reader.done();
+  return spec;
+}
+
+ConstraintSpec SceneBuilder::constraint(SectionReader& reader) {
+  ConstraintSpec spec;
+  spec.loc = reader.loc();
+  reader.read("type", spec.kind,
+              {{"fixed", ConstraintSpec::Kind::fixed},
+               {"displacement", ConstraintSpec::Kind::displacement}});
+  refer(reader, spec.object);
+  reader.read("nodes", spec.nodes);
+  reader.read("axes", spec.axes);
+  Eigen::Vector3d displacement = Eigen::Vector3d::Zero();
+  if (reader.read("displacement", displacement))
+    spec.displacement = Schedule::constant(displacement);
+  reader.read("schedule", spec.displacement);
+  reader.done();
+  // A fixed node is a zero displacement on every axis; spelling it out lets later stages
+  // treat both kinds alike.
+  if (spec.kind == ConstraintSpec::Kind::fixed)
+    spec.displacement = Schedule::constant(Eigen::Vector3d::Zero());
+  return spec;
+}
+
+OutputSpec SceneBuilder::output(SectionReader& reader) {
+  OutputSpec spec;
+  spec.loc = reader.loc();
+  reader.read("interval", spec.interval);
+  reader.read("vtk", spec.vtk);
+  reader.done();
+  return spec;
+}
+
+void SceneBuilder::check_names() {
+  std::map<std::string, SourceLoc> first;
+  for (const auto& named : names_) {
+    const auto [previous, inserted] = first.emplace(named.name, named.loc);
+    if (!inserted)
+      context_.error(named.loc, fmt::format("object name '{}' is used twice (first at line {})",
+                                            named.name, previous->second.line));
+  }
+}
+
+void SceneBuilder::check_references() {
+  std::vector<std::string_view> known;
+  for (const auto& named : names_)
+    if (std::find(known.begin(), known.end(), named.name) == known.end())
+      known.push_back(named.name);
+  for (const auto& reference : references_) {
+    if (std::find(known.begin(), known.end(), reference.name) != known.end()) continue;
+    std::string hint;
+    if (const auto suggestion = io::closest_match(reference.name, known))
+      hint = fmt::format("did you mean '{}'? ", *suggestion);
+    const std::string list = !known.empty()
+                                 ? fmt::format("known objects: {}", fmt::join(known, ", "))
+                             : objects_ > 0 ? "no object has a valid name"
+                                            : "no objects are defined";
+    context_.error(reference.loc, fmt::format("{} refers to unknown object '{}' ({}{})",
+                                              reference.where, reference.name, hint, list));
+  }
+}
+
+std::optional<std::string> read_file(const std::filesystem::path& file, std::string& text) {
+  const auto failure = [&](std::string_view reason) {
+    return fmt::format("cannot read scene file '{}': {}", file.string(), reason);
+  };
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec)) return failure(std::strerror(EISDIR));
+  errno = 0;
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return failure(errno != 0 ? std::strerror(errno) : "cannot open");
+  const auto size = std::filesystem::file_size(file, ec);
+  if (!ec && size > kMaxSceneBytes)
+    return failure(fmt::format("larger than {} MiB; is it a scene?", kMaxSceneBytes >> 20));
+  std::ostringstream content;
+  content << in.rdbuf();
+  if (in.bad()) return failure(errno != 0 ? std::strerror(errno) : "read error");
+  text = content.str();
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::string Diagnostic::str() const {
+  const std::string prefix = loc.file.empty() ? "" : loc.file + ":";
+  if (loc.line <= 0) return prefix.empty() ? message : fmt::format("{} {}", prefix, message);
+  if (loc.column <= 0) return fmt::format("{}{}: {}", prefix, loc.line, message);
+  return fmt::format("{}{}:{}: {}", prefix, loc.line, loc.column, message);
+}
+
+SceneError::SceneError(std::vector<Diagnostic> diagnostics)
+    : std::runtime_error(join_lines(diagnostics)), diagnostics_(std::move(diagnostics)) {}
+
+Scene parse_scene(const std::string& text, const std::string& file_name) {
+  SceneContext context(file_name);
+  Scene scene;
+  scene.file = file_name;
+  try {
+    if (const auto root = load_yaml(context, text))
+      scene = SceneBuilder(context).build(*root, file_name);
+  } catch (const YAML::Exception& e) {
+    // Node access should not throw once parsing succeeded; report rather than crash.
+    context.error(context.loc(e.mark), fmt::format("cannot read the scene: {}", e.msg));
+  }
+  if (!context.ok()) throw SceneError(context.sorted_diagnostics());
+  return scene;
+}
+
+Scene load_scene(const std::filesystem::path& file) {
+  std::string text;
+  if (auto problem = read_file(file, text)) throw SceneError({Diagnostic{{}, std::move(*problem)}});
+  return parse_scene(text, file.string());
+}
+
+}  // namespace phymul

@@ -1,0 +1,158 @@
+// Table-driven reading of the YAML maps of a scene file: each map is checked against one
+// section of the parameter table, and each value against its field's kind, unit and range.
+// Problems are collected, never thrown, so that one run reports all of them.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Core>
+#include <array>
+#include <functional>
+#include <initializer_list>
+#include <map>
+#include <optional>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "io/parameter_table.hpp"
+#include "phymul/scene.hpp"
+
+namespace phymul::io {
+
+// Collects the diagnostics of one scene file.
+class SceneContext {
+ public:
+  explicit SceneContext(std::string file) : file_(std::move(file)) {}
+
+  const std::string& file() const { return file_; }
+  SourceLoc loc(const YAML::Mark& mark) const;  // 1-based; 0 for nodes without a mark
+  SourceLoc loc(const YAML::Node& node) const { return loc(node.Mark()); }
+  void error(SourceLoc loc, std::string message);
+  // Sorted by position, so the report reads top to bottom.
+  std::vector<Diagnostic> sorted_diagnostics() const;
+  bool ok() const { return diagnostics_.empty(); }
+
+ private:
+  std::string file_;
+  std::vector<Diagnostic> diagnostics_;
+};
+
+// "a list", "a map", "nothing" or the quoted scalar: what was found instead of a value.
+std::string describe_node(const YAML::Node& node);
+
+// A YAML map read against one section of the table. Construction reports unknown and
+// repeated keys, missing required fields, fields that do not apply (see Parameter::when)
+// and one-of groups. Each read() then checks one field: it returns true when `out` was
+// set from the scene or from the table default, false when the field is absent without
+// default, does not apply, or is invalid (then diagnosed).
+class SectionReader {
+ public:
+  // `map` is a YAML map, or a null node for an omitted section; `where` names it in
+  // messages ("'material'", "'objects[0]'", "the top level").
+  SectionReader(SceneContext& context, const YAML::Node& map, std::string_view section,
+                std::string where, SourceLoc loc);
+
+  const SourceLoc& loc() const { return loc_; }
+  const std::string& where() const { return where_; }
+  // Position of the value the scene gives for `name`, if any.
+  std::optional<SourceLoc> value_loc(std::string_view name) const;
+
+  bool read(std::string_view name, double& out);
+  bool read(std::string_view name, std::optional<double>& out);  // the keyword gives nullopt
+  bool read(std::string_view name, Eigen::Vector3d& out);
+  // A vector whose unit is set by the enclosing field (schedule values).
+  bool read(std::string_view name, Eigen::Vector3d& out, Dimension dimension);
+  bool read(std::string_view name, int& out);
+  bool read(std::string_view name, long& out);
+  bool read(std::string_view name, bool& out);
+  bool read(std::string_view name, std::array<int, 3>& out);
+  bool read(std::string_view name, std::array<bool, 3>& out);  // axes
+  bool read(std::string_view name, std::string& out);          // name or choice
+  bool read(std::string_view name, NodeSelector& out);
+  bool read(std::string_view name, Schedule& out);
+
+  template <class Enum>
+  bool read(std::string_view name, Enum& out,
+            std::initializer_list<std::pair<std::string_view, Enum>> words) {
+    std::string word;
+    if (!read(name, word)) return false;
+    for (const auto& [text, value] : words) {
+      if (text != word) continue;
+      out = value;
+      return true;
+    }
+    throw std::logic_error("choice '" + word + "' of '" + std::string(name) +
+                           "' in the parameter table has no meaning in the parser");
+  }
+
+  // A nested map: nullopt when it is invalid, or absent while it has required fields.
+  std::optional<SectionReader> map(std::string_view name);
+  // Calls `read_entry` for each map of a list field, in order.
+  void items(std::string_view name, const std::function<void(SectionReader&)>& read_entry);
+
+  // Throws std::logic_error when a field of the section was never read: the table and the
+  // parser disagree. Deterministic per code path, so tests catch it.
+  void done() const;
+
+ private:
+  enum class Applies { yes, no, unknown };
+  struct Entry {
+    YAML::Node key, value;
+  };
+  struct Value {  // a field's value: the scene's, or the parsed table default
+    YAML::Node node;
+    SourceLoc loc;
+    const Parameter* parameter;
+    bool from_default;
+  };
+  struct Event {  // one entry of a schedule
+    double t;
+    Eigen::Vector3d value;
+    SourceLoc loc;  // of its time
+  };
+
+  void check_keys(const YAML::Node& map);
+  void check_presence();
+  void check_groups();
+  void report_not_applicable(const Parameter& parameter, const Entry& given) const;
+  std::string unknown_key_message(std::string_view key) const;
+  Applies applies(const Parameter& parameter) const;
+  std::optional<std::string> current_word(std::string_view key) const;
+  const Parameter& parameter(std::string_view name, std::initializer_list<Kind> kinds);
+  const Entry* entry(std::string_view name) const;
+  std::optional<Value> lookup(std::string_view name, std::initializer_list<Kind> kinds);
+  SourceLoc node_loc(const Value& value, const YAML::Node& node) const;
+  void error(const SourceLoc& loc, std::string message) const;
+  std::optional<std::string> scalar(const Value& value, std::string_view expected);
+  bool check_range(const Parameter& parameter, const SourceLoc& loc, std::string_view label,
+                   double value);
+  std::optional<double> quantity(const Value& value, const YAML::Node& node, std::string_view label,
+                                 Dimension dimension);
+  std::optional<long> integer(const Value& value, const YAML::Node& node, std::string_view label);
+  template <class Item, class ReadItem>
+  std::optional<std::array<Item, 3>> triple(const Value& value, ReadItem read_item);
+  std::optional<Eigen::Vector3d> vector(const Value& value, Dimension dimension);
+  bool read_selector_text(const Value& value, const std::string& text, NodeSelector& out);
+  bool read_index_token(const Value& value, std::string_view token, std::vector<int>& out);
+  bool read_index_list(const Value& value, NodeSelector& out);
+  bool read_shape(const Value& value, NodeSelector& out);
+  bool read_box(SectionReader& box, NodeSelector& out);
+  bool read_sphere(SectionReader& sphere, NodeSelector& out);
+  bool read_half_space(SectionReader& half_space, NodeSelector& out);
+  bool read_events(const Value& value, Schedule& out);
+  std::optional<Event> read_event(const Value& value, const YAML::Node& node,
+                                  const std::string& label);
+
+  SceneContext* context_;
+  std::string section_;
+  std::string where_;
+  SourceLoc loc_;
+  std::map<std::string, Entry, std::less<>> entries_;
+  std::set<std::string, std::less<>> read_;
+};
+
+}  // namespace phymul::io

@@ -1,0 +1,283 @@
+#include "phymul/vtk.hpp"
+
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <ostream>
+#include <stdexcept>
+#include <system_error>
+
+namespace phymul {
+
+namespace {
+
+// errno is the only reason iostreams leave behind; it can be stale, so fall back to a generic
+// word rather than blame an unrelated earlier error.
+std::string errno_reason(int err) { return err != 0 ? std::strerror(err) : "I/O error"; }
+
+std::string xml_escape(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&apos;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+// Shortest representation that parses back to the same bits, so results written and read
+// again compare exactly (restarts, regression checks against stored frames).
+void append_double(std::string& out, double value) {
+  char buffer[32];
+  const auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, value);
+  if (ec != std::errc{}) throw std::logic_error("to_chars failed for a double");
+  out.append(buffer, end);
+}
+
+void append_integer(std::string& out, long long value) {
+  char buffer[24];
+  const auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, value);
+  if (ec != std::errc{}) throw std::logic_error("to_chars failed for an integer");
+  out.append(buffer, end);
+}
+
+void check_finite(std::string_view what, std::span<const double> values) {
+  for (size_t i = 0; i < values.size(); ++i) {
+    if (!std::isfinite(values[i])) {
+      throw std::invalid_argument(
+          fmt::format("write_vtu: {} value {} at index {} is not finite", what, values[i], i));
+    }
+  }
+}
+
+void validate_vtu_input(std::span<const Vec3> points, std::span<const Cell> cells,
+                        std::span<const PointField> point_fields,
+                        std::span<const CellField> cell_fields) {
+  for (size_t i = 0; i < points.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      if (!std::isfinite(points[i][k])) {
+        throw std::invalid_argument(fmt::format(
+            "write_vtu: point {} coordinate {} is not finite ({})", i, k, points[i][k]));
+      }
+    }
+  }
+  for (size_t c = 0; c < cells.size(); ++c) {
+    for (const int node : cells[c].node_span()) {
+      if (node < 0 || size_t(node) >= points.size()) {
+        throw std::invalid_argument(fmt::format(
+            "write_vtu: cell {} refers to node {}, outside 0..{}", c, node, points.size()));
+      }
+    }
+  }
+  for (const PointField& field : point_fields) {
+    if (field.components != 1 && field.components != 3) {
+      throw std::invalid_argument(
+          fmt::format("write_vtu: point field '{}' has {} components, expected 1 or 3", field.name,
+                      field.components));
+    }
+    const size_t expected = points.size() * size_t(field.components);
+    if (field.values.size() != expected) {
+      throw std::invalid_argument(
+          fmt::format("write_vtu: point field '{}' has {} values, expected {} ({} points x {})",
+                      field.name, field.values.size(), expected, points.size(), field.components));
+    }
+    check_finite(fmt::format("point field '{}'", field.name), field.values);
+  }
+  for (const CellField& field : cell_fields) {
+    if (field.values.size() != cells.size()) {
+      throw std::invalid_argument(
+          fmt::format("write_vtu: cell field '{}' has {} values, expected {} (one per cell)",
+                      field.name, field.values.size(), cells.size()));
+    }
+  }
+}
+
+// One line per tuple keeps the files readable and diffable without costing much size.
+void write_double_array(std::ostream& os, std::string_view name, int components,
+                        std::span<const double> values) {
+  os << fmt::format(
+      "        <DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"{}\" "
+      "format=\"ascii\">\n",
+      xml_escape(name), components);
+  std::string line;
+  for (size_t i = 0; i < values.size(); i += size_t(components)) {
+    line.assign("          ");
+    for (int k = 0; k < components; ++k) {
+      if (k > 0) line += ' ';
+      append_double(line, values[i + size_t(k)]);
+    }
+    line += '\n';
+    os << line;
+  }
+  os << "        </DataArray>\n";
+}
+
+}  // namespace
+
+void write_file_atomically(const std::filesystem::path& path,
+                           const std::function<void(std::ostream&)>& write) {
+  std::filesystem::path tmp = path;
+  tmp += ".tmp";
+  const auto discard_tmp = [&] {
+    std::error_code ignored;
+    std::filesystem::remove(tmp, ignored);
+  };
+  const auto fail = [&](const std::string& reason) {
+    discard_tmp();
+    throw std::runtime_error(fmt::format("cannot write {}: {}", path.string(), reason));
+  };
+
+  errno = 0;
+  std::ofstream os(tmp, std::ios::binary | std::ios::trunc);
+  if (!os.is_open()) fail(errno_reason(errno));
+  try {
+    write(os);
+  } catch (...) {
+    os.close();
+    discard_tmp();
+    throw;
+  }
+  errno = 0;
+  os.flush();
+  if (!os) fail(errno_reason(errno));
+  os.close();
+  if (os.fail()) fail(errno_reason(errno));
+
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) fail(ec.message());
+}
+
+void write_vtu(const std::filesystem::path& path, std::span<const Vec3> points,
+               std::span<const Cell> cells, std::span<const PointField> point_fields,
+               std::span<const CellField> cell_fields) {
+  // Validate before opening anything so that bad input leaves no file behind.
+  validate_vtu_input(points, cells, point_fields, cell_fields);
+
+  write_file_atomically(path, [&](std::ostream& os) {
+    os << "<?xml version=\"1.0\"?>\n"
+          "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+          "  <UnstructuredGrid>\n";
+    os << fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", points.size(),
+                      cells.size());
+
+    os << "      <PointData>\n";
+    for (const PointField& field : point_fields) {
+      write_double_array(os, field.name, field.components, field.values);
+    }
+    os << "      </PointData>\n";
+
+    os << "      <CellData>\n";
+    std::string line;
+    for (const CellField& field : cell_fields) {
+      os << fmt::format(
+          "        <DataArray type=\"Int32\" Name=\"{}\" NumberOfComponents=\"1\" "
+          "format=\"ascii\">\n",
+          xml_escape(field.name));
+      for (const int value : field.values) {
+        line.assign("          ");
+        append_integer(line, value);
+        line += '\n';
+        os << line;
+      }
+      os << "        </DataArray>\n";
+    }
+    os << "      </CellData>\n";
+
+    os << "      <Points>\n";
+    // Eigen::Vector3d is exactly three packed doubles, but copying avoids relying on it.
+    std::vector<double> coordinates;
+    coordinates.reserve(points.size() * 3);
+    for (const Vec3& p : points) coordinates.insert(coordinates.end(), {p.x(), p.y(), p.z()});
+    write_double_array(os, "Points", 3, coordinates);
+    os << "      </Points>\n";
+
+    os << "      <Cells>\n";
+    os << "        <DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">\n";
+    for (const Cell& cell : cells) {
+      line.assign("          ");
+      bool first = true;
+      for (const int node : cell.node_span()) {
+        if (!first) line += ' ';
+        first = false;
+        append_integer(line, node);
+      }
+      line += '\n';
+      os << line;
+    }
+    os << "        </DataArray>\n";
+    // Int64 offsets: their running sum outgrows Int32 long before node indices do.
+    os << "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
+    long long offset = 0;
+    for (const Cell& cell : cells) {
+      offset += node_count(cell.type);
+      line.assign("          ");
+      append_integer(line, offset);
+      line += '\n';
+      os << line;
+    }
+    os << "        </DataArray>\n";
+    os << "        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
+    for (const Cell& cell : cells) {
+      line.assign("          ");
+      append_integer(line, vtk_cell_type(cell.type));
+      line += '\n';
+      os << line;
+    }
+    os << "        </DataArray>\n";
+    os << "      </Cells>\n";
+
+    os << "    </Piece>\n"
+          "  </UnstructuredGrid>\n"
+          "</VTKFile>\n";
+  });
+}
+
+void write_pvd(const std::filesystem::path& path, std::span<const PvdEntry> entries) {
+  for (size_t i = 0; i < entries.size(); ++i) {
+    if (!std::isfinite(entries[i].time)) {
+      throw std::invalid_argument(
+          fmt::format("write_pvd: time of entry {} ('{}') is not finite ({})", i, entries[i].file,
+                      entries[i].time));
+    }
+  }
+  write_file_atomically(path, [&](std::ostream& os) {
+    os << "<?xml version=\"1.0\"?>\n"
+          "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+          "  <Collection>\n";
+    std::string line;
+    for (const PvdEntry& entry : entries) {
+      line.assign("    <DataSet timestep=\"");
+      append_double(line, entry.time);
+      line += "\" group=\"\" part=\"0\" file=\"";
+      line += xml_escape(entry.file);
+      line += "\"/>\n";
+      os << line;
+    }
+    os << "  </Collection>\n"
+          "</VTKFile>\n";
+  });
+}
+
+}  // namespace phymul

@@ -1,0 +1,138 @@
+#include "phymul/model.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "forces/shape_memory.hpp"
+
+namespace phymul {
+namespace {
+
+void check_node_ids(const Model& model, const std::vector<int>& nodes, const char* what) {
+  for (int i : nodes)
+    if (i < 0 || i >= model.node_count())
+      throw std::invalid_argument(fmt::format(
+          "{}: node {} is out of range (the model has {} nodes)", what, i, model.node_count()));
+}
+
+// Node masses from the material: density times lumped cell volume, or a total mass spread
+// in proportion to the lumped cell measure (the only choice for a surface).
+std::vector<double> node_masses(const std::string& name, const Mesh& mesh,
+                                const MaterialSpec& material) {
+  std::vector<double> share = lumped_measure(mesh);
+  double total_measure = 0.0;
+  for (double s : share) total_measure += s;
+  if (material.density) {
+    if (!mesh.volumetric())
+      throw std::invalid_argument(fmt::format(
+          "object '{}': 'density' needs a volume mesh; give the total 'mass' of a surface", name));
+    for (double& s : share) s *= *material.density;
+  } else if (material.mass) {
+    for (double& s : share) s *= *material.mass / total_measure;
+  } else {
+    throw std::invalid_argument(
+        fmt::format("object '{}': the material needs 'density' or 'mass'", name));
+  }
+  return share;
+}
+
+}  // namespace
+
+int add_elastic_component(Model& model, const std::string& name, const Mesh& mesh,
+                          const MaterialSpec& material) {
+  validate(mesh);
+  if (!(material.stiffness > 0.0))
+    throw std::invalid_argument(
+        fmt::format("object '{}': 'stiffness' must be > 0 N/m (got {})", name, material.stiffness));
+  Component c;
+  c.name = name;
+  c.first_node = model.node_count();
+  c.node_count = int(mesh.points.size());
+  c.first_cell = int(model.cells.size());
+  c.cell_count = int(mesh.cells.size());
+  c.volumetric = mesh.volumetric();
+  const std::vector<Triangle> boundary = boundary_triangles(mesh);
+  if (is_closed(boundary))
+    for (const Triangle& t : boundary)
+      c.boundary.push_back({t[0] + c.first_node, t[1] + c.first_node, t[2] + c.first_node});
+  for (const auto& [set, ids] : mesh.node_sets) {
+    auto& global = c.node_sets[set];
+    for (int i : ids) global.push_back(i + c.first_node);
+  }
+
+  const std::vector<double> masses = node_masses(name, mesh, material);
+  for (size_t i = 0; i < mesh.points.size(); ++i) {
+    model.rest_position.push_back(mesh.points[i]);
+    model.mass.push_back(masses[i]);
+  }
+  const int component = int(model.components.size());
+  for (Cell cell : mesh.cells) {
+    for (int k = 0; k < node_count(cell.type); ++k) cell.nodes[k] += c.first_node;
+    model.cells.push_back(cell);
+    model.cell_component.push_back(component);
+  }
+  model.shape_memory.push_back(
+      build_shape_memory(name, mesh, c.first_node, material, model.rest_position));
+  model.components.push_back(std::move(c));
+  return component;
+}
+
+void add_volume_constraint(Model& model, int component) {
+  const Component& c = model.components.at(size_t(component));
+  if (c.boundary.empty())
+    throw std::invalid_argument(fmt::format(
+        "object '{}': a volume constraint needs a closed surface, and its surface is open "
+        "(some edge is not shared by exactly two faces)",
+        c.name));
+  VolumeConstraint v;
+  v.component = c.name;
+  v.triangles = c.boundary;
+  for (const Triangle& t : v.triangles) v.nodes.insert(v.nodes.end(), t.begin(), t.end());
+  std::sort(v.nodes.begin(), v.nodes.end());
+  v.nodes.erase(std::unique(v.nodes.begin(), v.nodes.end()), v.nodes.end());
+  v.target_volume = enclosed_volume(model.rest_position, v.triangles);
+  model.volumes.push_back(std::move(v));
+}
+
+void add_fixed_nodes(Model& model, const std::vector<int>& nodes) {
+  add_prescribed_displacement(model, {nodes, {true, true, true}, Schedule::constant(Vec3::Zero())});
+}
+
+void add_prescribed_displacement(Model& model, PrescribedDisplacement prescribed) {
+  check_node_ids(model, prescribed.nodes, "prescribed displacement");
+  model.prescribed.push_back(std::move(prescribed));
+}
+
+void add_applied_force(Model& model, AppliedForce force) {
+  check_node_ids(model, force.nodes, "applied force");
+  model.forces.push_back(std::move(force));
+}
+
+void finalize(Model& model) {
+  model.inverse_mass.assign(model.rest_position.size(), Vec3::Zero());
+  for (int i = 0; i < model.node_count(); ++i) {
+    if (!(model.mass[i] > 0.0))
+      throw std::invalid_argument(fmt::format(
+          "node {} has mass {} kg: every node must have a positive mass", i, model.mass[i]));
+    model.inverse_mass[i].setConstant(1.0 / model.mass[i]);
+  }
+  for (const PrescribedDisplacement& p : model.prescribed)
+    for (int i : p.nodes)
+      for (int a = 0; a < 3; ++a)
+        if (p.axes[a]) model.inverse_mass[i][a] = 0.0;
+}
+
+State make_state(const Model& model) {
+  State s;
+  s.x = model.rest_position;
+  s.v.assign(model.rest_position.size(), Vec3::Zero());
+  s.f.assign(model.rest_position.size(), Vec3::Zero());
+  size_t memory_nodes = 0;
+  for (const ShapeMemory& m : model.shape_memory) memory_nodes += m.nodes.size();
+  s.rotation.assign(memory_nodes, Eigen::Quaterniond::Identity());
+  return s;
+}
+
+}  // namespace phymul

@@ -1,0 +1,222 @@
+#include "phymul/simulator.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "constraints/constraints.hpp"
+#include "forces/forces.hpp"
+
+namespace phymul {
+namespace {
+
+Vec3 free_axes(const Vec3& inverse_mass) {
+  return (inverse_mass.array() > 0.0).cast<double>().matrix();
+}
+
+double bounding_diagonal(const std::vector<Vec3>& p) {
+  if (p.empty()) return 1.0;
+  Vec3 lo = p[0], hi = p[0];
+  for (const Vec3& q : p) lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
+  return std::max((hi - lo).norm(), 1e-12);
+}
+
+int component_of(const Model& model, int node) {
+  for (int c = 0; c < int(model.components.size()); ++c) {
+    const Component& k = model.components[c];
+    if (node >= k.first_node && node < k.first_node + k.node_count) return c;
+  }
+  return -1;
+}
+
+}  // namespace
+
+Simulator::Simulator(Model model) : model_(std::move(model)) {
+  if (model_.inverse_mass.size() != model_.rest_position.size()) finalize(model_);
+  state_ = make_state(model_);
+  const size_t n = model_.rest_position.size();
+  x_start_.assign(n, Vec3::Zero());
+  v_start_.assign(n, Vec3::Zero());
+  f_start_.assign(n, Vec3::Zero());
+  scratch_.assign(n, Vec3::Zero());
+  size_scale_ = bounding_diagonal(model_.rest_position);
+  const double stable = stable_time_step(model_);
+  dt_ = model_.settings.dt ? *model_.settings.dt : model_.settings.dt_safety * stable;
+  if (!std::isfinite(dt_)) dt_ = 1e-3;  // no stiffness at all: any step is stable
+  apply_position_constraints(model_, state_.x, 0.0, scratch_);
+  compute_forces(model_, state_, 0.0);
+}
+
+void Simulator::step() {
+  const double load_time = state_.time + dt_;
+  if (model_.settings.integrator == Integrator::verlet)
+    step_verlet(dt_, load_time);
+  else
+    step_newton_cotes(dt_, load_time);
+  state_.time = load_time;
+  ++state_.step;
+  check_stability();
+}
+
+// Velocity Verlet; the constraint projection enters the half-step velocity as the
+// correction over dt (the reaction of the constraint).
+void Simulator::step_verlet(double h, double load_time) {
+  State& s = state_;
+  const double c = model_.damping;
+  const int n = model_.node_count();
+  for (int i = 0; i < n; ++i) {
+    const Vec3 a = model_.inverse_mass[i].cwiseProduct(s.f[i]) -
+                   c * s.v[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
+    x_start_[i] = s.x[i];
+    s.x[i] += h * (s.v[i] + 0.5 * h * a);
+  }
+  apply_position_constraints(model_, s.x, load_time, scratch_);
+  for (int i = 0; i < n; ++i) s.v[i] = (s.x[i] - x_start_[i]) / h;
+  compute_forces(model_, s, load_time);
+  load_time_ = load_time;
+  for (int i = 0; i < n; ++i) {
+    const Vec3 a = model_.inverse_mass[i].cwiseProduct(s.f[i]) -
+                   c * s.v[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
+    s.v[i] += 0.5 * h * a;
+  }
+}
+
+// The paper's Newton-Cotes family: an Euler predictor, then the trapezoid rule on the
+// accelerations at both ends (second order).
+void Simulator::step_newton_cotes(double h, double load_time) {
+  State& s = state_;
+  const double c = model_.damping;
+  const int n = model_.node_count();
+  for (int i = 0; i < n; ++i) {
+    x_start_[i] = s.x[i];
+    v_start_[i] = s.v[i];
+    f_start_[i] = model_.inverse_mass[i].cwiseProduct(s.f[i]) -
+                  c * s.v[i].cwiseProduct(free_axes(model_.inverse_mass[i]));  // a0
+    s.x[i] += h * s.v[i];
+    s.v[i] += h * f_start_[i];
+  }
+  apply_prescribed(model_, s.x, load_time);
+  compute_forces(model_, s, load_time);
+  for (int i = 0; i < n; ++i) {
+    const Vec3 a1 = model_.inverse_mass[i].cwiseProduct(s.f[i]) -
+                    c * s.v[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
+    s.v[i] = v_start_[i] + 0.5 * h * (f_start_[i] + a1);
+    s.x[i] = x_start_[i] + 0.5 * h * (v_start_[i] + s.v[i]);
+    f_start_[i] = s.x[i];  // a0 is spent: keep the unconstrained position instead
+  }
+  apply_position_constraints(model_, s.x, load_time, scratch_);
+  for (int i = 0; i < n; ++i) s.v[i] += (s.x[i] - f_start_[i]) / h;
+  compute_forces(model_, s, load_time);
+  load_time_ = load_time;
+}
+
+void Simulator::check_stability() const {
+  const State& s = state_;
+  for (int i = 0; i < model_.node_count(); ++i) {
+    const double moved = (s.x[i] - model_.rest_position[i]).norm();
+    const bool finite = std::isfinite(moved) && s.v[i].allFinite();
+    if (finite && moved <= 10.0 * size_scale_) continue;
+    const int c = component_of(model_, i);
+    const std::string what =
+        finite ? fmt::format("moved {:.3g} m, more than 10 times the model's size ({:.3g} m)",
+                             moved, size_scale_)
+               : std::string("has a non-finite position or velocity");
+    throw InstabilityError(
+        fmt::format("the simulation became unstable at t = {:.6g} s (step {}): node {} of "
+                    "component '{}' {}. The time step is {:.3g} s and the stability estimate "
+                    "is {:.3g} s: set simulation.dt smaller (or 'auto' with dt_safety below "
+                    "0.5), add damping, or check the stiffness and masses.",
+                    s.time, s.step, i, c >= 0 ? model_.components[c].name : "?", what, dt_,
+                    stable_time_step(model_)),
+        i, s.time);
+  }
+}
+
+double Simulator::kinetic_energy() const {
+  double e = 0.0;
+  for (int i = 0; i < model_.node_count(); ++i)
+    e += 0.5 * model_.mass[i] * state_.v[i].squaredNorm();
+  return e;
+}
+
+double Simulator::max_residual_force() {
+  // f_start_ holds the residual and scratch_ the volume gradients: both free between steps.
+  std::vector<Vec3>& r = f_start_;
+  for (int i = 0; i < model_.node_count(); ++i)
+    r[i] = state_.f[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
+  for (const VolumeConstraint& c : model_.volumes) {
+    volume_gradient(c, state_.x, scratch_);
+    double rg = 0.0, gg = 0.0;
+    for (int i : c.nodes) {
+      scratch_[i] = scratch_[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
+      rg += r[i].dot(scratch_[i]);
+      gg += scratch_[i].squaredNorm();
+    }
+    if (gg == 0.0) continue;
+    const double pressure = rg / gg;  // the part of the force the constraint balances
+    for (int i : c.nodes) r[i] -= pressure * scratch_[i];
+  }
+  double largest = 0.0;
+  for (int i = 0; i < model_.node_count(); ++i) largest = std::max(largest, r[i].norm());
+  return largest;
+}
+
+std::vector<double> Simulator::component_volumes() const {
+  std::vector<double> v;
+  for (const Component& c : model_.components)
+    v.push_back(c.boundary.empty() ? std::nan("") : enclosed_volume(state_.x, c.boundary));
+  return v;
+}
+
+StaticResult Simulator::relax(double load_time, long max_iterations,
+                              const std::function<void(long, double)>& progress) {
+  StaticResult result;
+  apply_position_constraints(model_, state_.x, load_time, scratch_);
+  compute_forces(model_, state_, load_time);
+  double previous_kinetic = 0.0;
+  for (;;) {
+    result.residual = max_residual_force();
+    if (result.residual < model_.settings.tolerance) {
+      result.converged = true;
+      break;
+    }
+    if (result.iterations >= max_iterations) break;
+    if (model_.settings.integrator == Integrator::verlet)
+      step_verlet(dt_, load_time);
+    else
+      step_newton_cotes(dt_, load_time);
+    ++result.iterations;
+    ++state_.step;
+    check_stability();
+    if (model_.settings.kinetic_damping) {
+      // Dynamic relaxation: at a kinetic-energy peak the system is nearest its minimum
+      // along the current motion, so restart from rest there.
+      const double kinetic = kinetic_energy();
+      if (kinetic < previous_kinetic) {
+        for (Vec3& v : state_.v) v.setZero();
+        previous_kinetic = 0.0;
+      } else {
+        previous_kinetic = kinetic;
+      }
+    }
+    if (progress && result.iterations % 256 == 0) progress(result.iterations, result.residual);
+  }
+  state_.time = load_time;
+  return result;
+}
+
+StaticResult Simulator::solve_static(const std::function<void(long, double)>& progress) {
+  const SimulationSpec& s = model_.settings;
+  StaticResult total;
+  for (int k = 1; k <= s.load_steps; ++k) {
+    const double load_time = s.duration * double(k) / double(s.load_steps);
+    const StaticResult r = relax(load_time, s.max_iterations - total.iterations, progress);
+    total.iterations += r.iterations;
+    total.residual = r.residual;
+    total.converged = r.converged;
+    if (!r.converged) break;
+  }
+  return total;
+}
+
+}  // namespace phymul

@@ -1,0 +1,31 @@
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "phymul/simulator.hpp"
+
+namespace phymul {
+
+double stable_time_step(const Model& model) {
+  // Row sums of |df/dx| per node (rotation terms neglected): a node's own pull K(a - x)
+  // gives K on itself and K/n on each of its n neighbours; with the reaction option each
+  // node it neighbours adds its own row share 2K/n.
+  std::vector<double> row(size_t(model.node_count()), 0.0);
+  for (const ShapeMemory& m : model.shape_memory) {
+    for (int k = 0; k < int(m.nodes.size()); ++k) {
+      row[m.nodes[k]] += 2.0 * m.stiffness;
+      if (!m.reaction) continue;
+      const auto nb = m.neighbours.row(k);
+      for (int j : nb) row[j] += 2.0 * m.stiffness / double(nb.size());
+    }
+  }
+  double omega2 = 0.0;
+  for (int i = 0; i < model.node_count(); ++i) omega2 = std::max(omega2, row[i] / model.mass[i]);
+  if (omega2 == 0.0) return std::numeric_limits<double>::infinity();
+  const double omega = std::sqrt(omega2);
+  // Central differences with viscous damping c: dt < (2/w)(sqrt(1 + xi^2) - xi), xi = c/(2w).
+  const double xi = model.damping / (2.0 * omega);
+  return 2.0 / omega * (std::sqrt(1.0 + xi * xi) - xi);
+}
+
+}  // namespace phymul

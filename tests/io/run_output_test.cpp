@@ -1,0 +1,85 @@
+// `phymul run` writes frames, a series, monitors and a report that real readers accept.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "support/process.hpp"
+
+namespace phymul {
+namespace {
+
+using testing::run_command;
+
+constexpr const char* kScene = R"(simulation:
+  dt: auto
+  duration: 0.2 s
+  gravity: [0, 0, -9.81]
+  damping: 5 1/s
+objects:
+  - name: jelly
+    mesh: {generator: box, size: [2 cm, 2 cm, 2 cm], cells: [2, 2, 2]}
+    material: {stiffness: 5 N/m, density: 1000 kg/m^3}
+    volume_constraint: true
+constraints:
+  - {type: fixed, object: jelly, nodes: top}
+output:
+  interval: 0.05 s
+)";
+
+// Reads the series with meshio and checks each frame against its own fields:
+// displacement = points - rest points, and prints a summary line to parse.
+constexpr const char* kReader = R"(import json, sys, os, xml.etree.ElementTree as ET
+import meshio, numpy as np
+d = sys.argv[1]
+root = ET.parse(os.path.join(d, 'jelly.pvd')).getroot()
+sets = root.find('Collection').findall('DataSet')
+rest = meshio.read(os.path.join(d, sets[0].get('file'))).points
+worst = 0.0
+for s in sets:
+    m = meshio.read(os.path.join(d, s.get('file')))
+    u = m.point_data['displacement']
+    worst = max(worst, float(np.abs(m.points - rest - u).max()))
+    assert m.cells[0].type == 'hexahedron' and len(m.cells[0].data) == 8
+    assert set(np.ravel(m.cell_data['component'][0]).tolist()) == {0}
+r = json.load(open(os.path.join(d, 'report.json')))
+mon = np.genfromtxt(os.path.join(d, 'monitors.csv'), delimiter=',', names=True)
+v = mon['volume_jelly_m3']
+print('frames', len(sets), 'worst', worst, 'sag', float(-u[:, 2].min()),
+      'status', r['status'], 'steps', r['steps'], 'volerr', float(np.abs(v / 8e-6 - 1).max()),
+      'time', r['simulated_time_s'])
+)";
+
+TEST(RunOutput, SeriesMonitorsAndReportReadBack) {
+  testing::TempDir dir;
+  const auto scene = dir.path() / "jelly.yaml";
+  std::ofstream(scene) << kScene;
+  const auto out = dir.path() / "out";
+  const auto run = run_command(testing::cli() + " run " + scene.string() + " -o " + out.string());
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  for (const auto& e : std::filesystem::directory_iterator(out))
+    EXPECT_NE(e.path().extension(), ".tmp") << "left behind: " << e.path();
+
+  const auto script = dir.path() / "read.py";
+  std::ofstream(script) << kReader;
+  const auto read = run_command("/usr/bin/python3 " + script.string() + " " + out.string());
+  ASSERT_EQ(read.exit_code, 0) << "reading the results with meshio failed (make test installs "
+                                  "python3-meshio):\n"
+                               << read.output;
+  std::istringstream in(read.output);
+  std::string key, status;
+  int frames = 0;
+  long steps = 0;
+  double worst = 1, sag = 0, volerr = 1, time = 0;
+  in >> key >> frames >> key >> worst >> key >> sag >> key >> status >> key >> steps >> key >>
+      volerr >> key >> time;
+  EXPECT_EQ(frames, 5);  // t = 0 and every 0.05 s up to 0.2 s
+  EXPECT_LT(worst, 1e-15);
+  EXPECT_GT(sag, 1e-4);  // the jelly sags under its weight
+  EXPECT_EQ(status, "completed");
+  EXPECT_GT(steps, 10);
+  EXPECT_LT(volerr, 1e-10);
+  EXPECT_NEAR(time, 0.2, 1e-3);
+}
+
+}  // namespace
+}  // namespace phymul

@@ -1,0 +1,53 @@
+// No heap allocation inside a step: global operator new counts while a step runs.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+#include "phymul/simulator.hpp"
+#include "support/models.hpp"
+
+namespace {
+std::atomic<long> allocations{0};
+std::atomic<bool> counting{false};
+}  // namespace
+
+void* operator new(std::size_t size) {
+  if (counting) ++allocations;
+  if (void* p = std::malloc(size ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
+namespace phymul {
+namespace {
+
+TEST(Simulator, StepsDoNotAllocate) {
+  for (Integrator integrator : {Integrator::verlet, Integrator::newton_cotes}) {
+    Model model;
+    const int c = add_elastic_component(model, "block",
+                                        make_box(Vec3(0.03, 0.03, 0.03), {4, 4, 4}, CellType::hexa),
+                                        testing::material(20.0));
+    add_volume_constraint(model, c);
+    add_fixed_nodes(model, model.components[c].node_sets.at("bottom"));
+    add_applied_force(model, {model.components[c].node_sets.at("top"),
+                              Schedule{{0.0, 0.01}, {Vec3::Zero(), Vec3(0, 0, -1e-3)}}});
+    model.gravity = Vec3(0, 0, -9.81);
+    model.settings.integrator = integrator;
+    finalize(model);
+    Simulator sim(model);
+    sim.step();
+    allocations = 0;
+    counting = true;
+    for (int k = 0; k < 50; ++k) sim.step();
+    const double residual = sim.max_residual_force();
+    counting = false;
+    EXPECT_EQ(allocations.load(), 0);
+    EXPECT_GT(residual, 0.0);
+  }
+}
+
+}  // namespace
+}  // namespace phymul
