@@ -2,6 +2,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <vector>
 
 namespace phymul {
@@ -18,8 +19,8 @@ struct Schedule {
     if (times.empty()) return Eigen::Vector3d::Zero();
     if (t <= times.front()) return values.front();
     if (t >= times.back()) return values.back();
-    size_t hi = 1;
-    while (times[hi] < t) ++hi;  // schedules hold a handful of events
+    // times.front() < t < times.back(): the first later event has an earlier one before it.
+    const size_t hi = size_t(std::upper_bound(times.begin(), times.end(), t) - times.begin());
     const double s = (t - times[hi - 1]) / (times[hi] - times[hi - 1]);
     return (1.0 - s) * values[hi - 1] + s * values[hi];
   }
