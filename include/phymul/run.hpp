@@ -16,7 +16,8 @@ struct RunOptions {
 struct RunReport {
   std::string status = "completed";  // completed | unstable | not-converged
   std::string message;
-  long steps = 0;               // explicit steps, or static iterations
+  std::string mode = "dynamic";  // dynamic | static
+  long steps = 0;               // explicit steps, or static relaxation iterations
   double simulated_time = 0.0;  // s
   double wall_time = 0.0;       // s
   double ns_per_node_per_step = 0.0;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "io/parameter_table.hpp"
 #include "phymul/model.hpp"
 
 namespace phymul {
@@ -36,7 +37,9 @@ struct Compiler {
       const int c = add_elastic_component(model, o.name, mesh, o.material);
       if (o.volume_constraint) add_volume_constraint(model, c);
     } catch (const std::exception& e) {
-      fail(o.loc, fmt::format("object '{}': {}", o.name, e.what()));
+      const std::string what = e.what();
+      const std::string prefix = fmt::format("object '{}'", o.name);
+      fail(o.loc, what.starts_with(prefix) ? what : prefix + ": " + what);
     }
   }
 
@@ -68,9 +71,15 @@ struct Compiler {
       const auto it = c->node_sets.find(s.name);
       if (it == c->node_sets.end()) {
         std::string known;
-        for (const auto& [name, ids] : c->node_sets) known += (known.empty() ? "" : ", ") + name;
-        fail(s.loc, fmt::format("object '{}' has no node set '{}' (its node sets: {})", object,
-                                s.name, known.empty() ? "none" : known));
+        std::vector<std::string_view> names;
+        for (const auto& [name, ids] : c->node_sets) {
+          known += (known.empty() ? "" : ", ") + name;
+          names.push_back(name);
+        }
+        const auto close = io::closest_match(s.name, names);
+        fail(s.loc, fmt::format("object '{}' has no node set '{}' ({}its node sets: {})", object,
+                                s.name, close ? fmt::format("did you mean '{}'? ", *close) : "",
+                                known.empty() ? "none" : known));
         return {};
       }
       nodes = it->second;

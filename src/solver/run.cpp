@@ -19,10 +19,10 @@ class ProgressLine {
   ~ProgressLine() {
     if (on_ && shown_) std::fputs("\n", stderr);
   }
-  void show(double fraction, const std::string& detail) {
+  void show(double fraction, const std::string& detail, bool force = false) {
     if (!on_) return;
     const auto now = std::chrono::steady_clock::now();
-    if (shown_ && now - last_ < std::chrono::milliseconds(200)) return;
+    if (!force && shown_ && now - last_ < std::chrono::milliseconds(200)) return;
     last_ = now;
     shown_ = true;
     const int width = 30, filled = int(std::clamp(fraction, 0.0, 1.0) * width);
@@ -57,6 +57,7 @@ RunReport run_scene(const Scene& scene, const RunOptions& options) {
   out.monitor(sim);
   try {
     if (settings.mode == SolveMode::static_equilibrium) {
+      report.mode = "static";
       const StaticResult r = sim.solve_static([&](long it, double residual) {
         progress.show(double(it) / double(settings.max_iterations),
                       fmt::format("iteration {}  residual {:.3g} N", it, residual));
@@ -92,6 +93,7 @@ RunReport run_scene(const Scene& scene, const RunOptions& options) {
         if ((k & 63) == 0)
           progress.show(double(k) / double(steps), fmt::format("t = {:.4g} s  step {}", t, k));
       }
+      progress.show(1.0, fmt::format("t = {:.4g} s  step {}", sim.state().time, steps), true);
       report.steps = steps;
       report.residual = sim.max_residual_force();
       report.converged = true;

@@ -56,3 +56,32 @@ TEST(Cli, ReadmeSceneReferenceIsTheGeneratedOne) {
 
 }  // namespace
 }  // namespace phymul
+
+namespace phymul {
+namespace {
+
+// Scenes that parse but describe an impossible model: each file's `# expect:` lines must
+// appear in `phymul check`'s report, with a non-zero exit.
+TEST(Cli, BadModelsAreReportedAtTheirLocation) {
+  int seen = 0;
+  for (const auto& e :
+       std::filesystem::directory_iterator(testing::source_dir() / "tests/data/bad_models")) {
+    if (e.path().extension() != ".yaml") continue;
+    ++seen;
+    const auto r = testing::run_command(testing::cli() + " check " + e.path().string());
+    EXPECT_EQ(r.exit_code, 1) << e.path() << '\n' << r.output;
+    std::istringstream lines(testing::read_text(e.path()));
+    int expectations = 0;
+    for (std::string line; std::getline(lines, line);) {
+      if (!line.starts_with("# expect: ")) continue;
+      ++expectations;
+      EXPECT_NE(r.output.find(line.substr(10)), std::string::npos)
+          << e.path() << " lacks: " << line.substr(10) << "\ngot:\n" << r.output;
+    }
+    EXPECT_GT(expectations, 0) << e.path();
+  }
+  EXPECT_GE(seen, 4);
+}
+
+}  // namespace
+}  // namespace phymul
