@@ -10,6 +10,7 @@
 #include "phymul/run.hpp"
 #include "phymul/scene.hpp"
 #include "phymul/simulator.hpp"
+#include "truthcube_command.hpp"
 
 namespace {
 
@@ -82,11 +83,13 @@ int main(int argc, char** argv) {
   check_cmd->add_option("scene", scene_file, "scene file (YAML)")->required();
 
   app.add_subcommand("schema", "print the scene file reference (Markdown)");
+  const auto truthcube = phymul::cli::add_truthcube_command(app);
 
   CLI11_PARSE(app, argc, argv);
   try {
     if (*run_cmd) return run(scene_file, out_dir, quiet);
     if (*check_cmd) return check(scene_file);
+    if (*truthcube.app) return truthcube.run();
     std::cout << phymul::scene_reference_markdown();
     return 0;
   } catch (const std::exception& e) {

@@ -17,9 +17,9 @@ struct RunReport {
   std::string status = "completed";  // completed | unstable | not-converged
   std::string message;
   std::string mode = "dynamic";  // dynamic | static
-  long steps = 0;               // explicit steps, or static relaxation iterations
-  double simulated_time = 0.0;  // s
-  double wall_time = 0.0;       // s
+  long steps = 0;                // explicit steps, or static relaxation iterations
+  double simulated_time = 0.0;   // s
+  double wall_time = 0.0;        // s
   double ns_per_node_per_step = 0.0;
   double dt = 0.0, stable_dt = 0.0;  // s
   int nodes = 0;

@@ -34,6 +34,10 @@ void write_vtu(const std::filesystem::path& path, std::span<const Vec3> points,
                std::span<const Cell> cells, std::span<const PointField> point_fields,
                std::span<const CellField> cell_fields);
 
+// Points alone (one VTK_VERTEX cell each), e.g. tracked beads, written atomically.
+void write_points_vtu(const std::filesystem::path& path, std::span<const Vec3> points,
+                      std::span<const PointField> point_fields);
+
 struct PvdEntry {
   double time = 0.0;  // s
   std::string file;   // relative to the .pvd

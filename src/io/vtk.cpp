@@ -169,89 +169,94 @@ void write_file_atomically(const std::filesystem::path& path,
   if (ec) fail(ec.message());
 }
 
-void write_vtu(const std::filesystem::path& path, std::span<const Vec3> points,
-               std::span<const Cell> cells, std::span<const PointField> point_fields,
-               std::span<const CellField> cell_fields) {
-  // Validate before opening anything so that bad input leaves no file behind.
-  validate_vtu_input(points, cells, point_fields, cell_fields);
+namespace {
 
+// Connectivity of an unstructured grid as VTK stores it.
+struct CellArrays {
+  std::vector<int> connectivity;
+  std::vector<long long> offsets;  // Int64: the running sum outgrows Int32 before node ids do
+  std::vector<int> types;
+};
+
+void write_integer_array(std::ostream& os, std::string_view type, std::string_view name,
+                         std::span<const long long> values) {
+  os << fmt::format("        <DataArray type=\"{}\" Name=\"{}\" format=\"ascii\">\n", type,
+                    xml_escape(name));
+  std::string line;
+  for (const long long value : values) {
+    line.assign("          ");
+    append_integer(line, value);
+    line += '\n';
+    os << line;
+  }
+  os << "        </DataArray>\n";
+}
+
+std::vector<long long> widen(std::span<const int> values) {
+  return std::vector<long long>(values.begin(), values.end());
+}
+
+void write_grid(const std::filesystem::path& path, std::span<const Vec3> points,
+                const CellArrays& cells, std::span<const PointField> point_fields,
+                std::span<const CellField> cell_fields) {
   write_file_atomically(path, [&](std::ostream& os) {
     os << "<?xml version=\"1.0\"?>\n"
           "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
           "  <UnstructuredGrid>\n";
     os << fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", points.size(),
-                      cells.size());
-
+                      cells.types.size());
     os << "      <PointData>\n";
-    for (const PointField& field : point_fields) {
+    for (const PointField& field : point_fields)
       write_double_array(os, field.name, field.components, field.values);
-    }
     os << "      </PointData>\n";
-
     os << "      <CellData>\n";
-    std::string line;
-    for (const CellField& field : cell_fields) {
-      os << fmt::format(
-          "        <DataArray type=\"Int32\" Name=\"{}\" NumberOfComponents=\"1\" "
-          "format=\"ascii\">\n",
-          xml_escape(field.name));
-      for (const int value : field.values) {
-        line.assign("          ");
-        append_integer(line, value);
-        line += '\n';
-        os << line;
-      }
-      os << "        </DataArray>\n";
-    }
+    for (const CellField& field : cell_fields)
+      write_integer_array(os, "Int32", field.name, widen(field.values));
     os << "      </CellData>\n";
-
     os << "      <Points>\n";
-    // Eigen::Vector3d is exactly three packed doubles, but copying avoids relying on it.
     std::vector<double> coordinates;
     coordinates.reserve(points.size() * 3);
     for (const Vec3& p : points) coordinates.insert(coordinates.end(), {p.x(), p.y(), p.z()});
     write_double_array(os, "Points", 3, coordinates);
     os << "      </Points>\n";
-
     os << "      <Cells>\n";
-    os << "        <DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">\n";
-    for (const Cell& cell : cells) {
-      line.assign("          ");
-      bool first = true;
-      for (const int node : cell.node_span()) {
-        if (!first) line += ' ';
-        first = false;
-        append_integer(line, node);
-      }
-      line += '\n';
-      os << line;
-    }
-    os << "        </DataArray>\n";
-    // Int64 offsets: their running sum outgrows Int32 long before node indices do.
-    os << "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
-    long long offset = 0;
-    for (const Cell& cell : cells) {
-      offset += node_count(cell.type);
-      line.assign("          ");
-      append_integer(line, offset);
-      line += '\n';
-      os << line;
-    }
-    os << "        </DataArray>\n";
-    os << "        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
-    for (const Cell& cell : cells) {
-      line.assign("          ");
-      append_integer(line, vtk_cell_type(cell.type));
-      line += '\n';
-      os << line;
-    }
-    os << "        </DataArray>\n";
+    write_integer_array(os, "Int32", "connectivity", widen(cells.connectivity));
+    write_integer_array(os, "Int64", "offsets", cells.offsets);
+    write_integer_array(os, "UInt8", "types", widen(cells.types));
     os << "      </Cells>\n";
-
     os << "    </Piece>\n"
           "  </UnstructuredGrid>\n"
           "</VTKFile>\n";
   });
+}
+
+}  // namespace
+
+void write_vtu(const std::filesystem::path& path, std::span<const Vec3> points,
+               std::span<const Cell> cells, std::span<const PointField> point_fields,
+               std::span<const CellField> cell_fields) {
+  // Validate before opening anything so that bad input leaves no file behind.
+  validate_vtu_input(points, cells, point_fields, cell_fields);
+  CellArrays arrays;
+  for (const Cell& cell : cells) {
+    for (const int node : cell.node_span()) arrays.connectivity.push_back(node);
+    arrays.offsets.push_back(static_cast<long long>(arrays.connectivity.size()));
+    arrays.types.push_back(vtk_cell_type(cell.type));
+  }
+  write_grid(path, points, arrays, point_fields, cell_fields);
+}
+
+void write_points_vtu(const std::filesystem::path& path, std::span<const Vec3> points,
+                      std::span<const PointField> point_fields) {
+  validate_vtu_input(points, {}, point_fields, {});
+  constexpr int kVtkVertex = 1;
+  CellArrays arrays;
+  for (int i = 0; i < int(points.size()); ++i) {
+    arrays.connectivity.push_back(i);
+    arrays.offsets.push_back(i + 1);
+    arrays.types.push_back(kVtkVertex);
+  }
+  write_grid(path, points, arrays, point_fields, {});
 }
 
 void write_pvd(const std::filesystem::path& path, std::span<const PvdEntry> entries) {

@@ -1,0 +1,89 @@
+#include "truthcube_command.hpp"
+
+#include <fmt/format.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <memory>
+
+#include "phymul/truthcube.hpp"
+#include "phymul/vtk.hpp"
+
+namespace phymul::cli {
+namespace {
+
+struct Settings {
+  truthcube::StudyOptions study;
+  std::string data = PHYMUL_DATA_DIR "/truthcube/uniaxial_positions.csv";
+  std::string output = "results/truthcube";
+  std::string json_file;
+  std::string frame = "polar";
+  bool no_reaction = false, no_volume = false, no_fem = false, no_pictures = false;
+  bool quiet = false;
+};
+
+// Pictures need Debian's Python with matplotlib and VTK (make demo installs them): their
+// absence costs the PNGs, never the numbers.
+void make_pictures(const Settings& s) {
+  const std::string script = PHYMUL_SOURCE_DIR "/scripts/truthcube_pictures.sh";
+  const int rc = std::system(
+      fmt::format("'{}' '{}' {}", script, s.output, s.quiet ? ">/dev/null 2>&1" : "").c_str());
+  if (rc != 0)
+    std::cerr << fmt::format(
+        "warning: the pictures were not made ({} failed; run `make demo` "
+        "once to install python3-matplotlib, python3-vtk9 and xvfb)\n",
+        script);
+}
+
+int run(Settings& s) {
+  s.study.frame = s.frame == "frame" ? FrameMode::frame : FrameMode::polar;
+  s.study.reaction = !s.no_reaction;
+  s.study.volume_constraint = !s.no_volume;
+  s.study.fem = !s.no_fem;
+  try {
+    const auto beads = truthcube::load_beads(s.data);
+    const truthcube::Study study = truthcube::run_study(beads, s.study);
+    truthcube::write_outputs(study, beads, s.study, s.output);
+    if (!s.json_file.empty())
+      write_file_atomically(s.json_file,
+                            [&](std::ostream& o) { o << truthcube::json(study, s.study); });
+    std::cout << truthcube::table(study, s.study);
+    if (!s.no_pictures) make_pictures(s);
+    if (!s.quiet) std::cout << fmt::format("results in {}/\n", s.output);
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << '\n';
+    return 1;
+  }
+}
+
+}  // namespace
+
+TruthcubeCommand add_truthcube_command(CLI::App& parent) {
+  auto settings = std::make_shared<Settings>();
+  Settings& s = *settings;
+  CLI::App* app = parent.add_subcommand(
+      "truthcube", "the Truth Cube validation: beads measured vs shape memory and FEM");
+  app->add_option("--cells", s.study.cells, "hexahedra per cube edge")
+      ->check(CLI::Range(2, 64))
+      ->capture_default_str();
+  app->add_option("--data", s.data, "bead positions (CSV)")->check(CLI::ExistingFile);
+  app->add_option("-o,--output", s.output, "output directory")->capture_default_str();
+  app->add_option("--json", s.json_file, "also write the table as JSON to this file");
+  app->add_option("--frame", s.frame, "shape-memory frame")
+      ->check(CLI::IsMember({"polar", "frame"}))
+      ->capture_default_str();
+  app->add_flag("--no-reaction", s.no_reaction, "the paper's force on the node alone");
+  app->add_flag("--no-volume", s.no_volume, "no volume constraint on the shape-memory model");
+  app->add_flag("--sliding", s.study.sliding, "plates let the faces slide (default: no slip)");
+  app->add_flag("--no-fem", s.no_fem, "skip the reference FEM");
+  app->add_flag("--no-pictures", s.no_pictures, "skip the PNG plot and rendering");
+  app->add_option("--poisson", s.study.poisson, "FEM Poisson ratio")
+      ->check(CLI::Range(0.0, 0.4999))
+      ->capture_default_str();
+  app->add_flag("-q,--quiet", s.quiet, "only the table");
+  return {app, [settings] { return run(*settings); }};
+}
+
+}  // namespace phymul::cli

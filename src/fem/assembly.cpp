@@ -1,0 +1,165 @@
+// Assembly into a fixed sparsity pattern: every element entry knows where its value goes, so
+// each Newton iteration only zeroes the value arrays and adds into them (no triplets, no
+// sorting), and the sparse factorisation can keep its symbolic analysis.
+#include <Eigen/SparseCore>
+#include <algorithm>
+
+#include "fem/system.hpp"
+
+namespace phymul::fem {
+
+namespace {
+
+template <int NN>
+Eigen::Matrix<double, 3, NN> gather_nodes(const std::vector<Vec3>& points,
+                                          const std::array<int, 8>& nodes) {
+  Eigen::Matrix<double, 3, NN> x;
+  for (int a = 0; a < NN; ++a) x.col(a) = points[nodes[a]];
+  return x;
+}
+
+// Position of (row, col) in the values of a compressed column-major matrix holding it.
+int value_position(const SparseMatrix& m, int row, int col) {
+  const int* begin = m.innerIndexPtr() + m.outerIndexPtr()[col];
+  const int* end = m.innerIndexPtr() + m.outerIndexPtr()[col + 1];
+  return int(std::lower_bound(begin, end, row) - m.innerIndexPtr());
+}
+
+}  // namespace
+
+System::System(const Mesh& mesh, const Material& material, std::vector<char> prescribed)
+    : law_{material.law, moduli(material)} {
+  const int nodes = int(mesh.points.size());
+  std::vector<char> used(nodes, 0);
+  for (std::size_t c = 0; c < mesh.cells.size(); ++c) {
+    const Cell& cell = mesh.cells[c];
+    Element e;
+    e.type = cell.type;
+    e.nodes = cell.nodes;
+    for (int n : cell.node_span()) used[n] = 1;
+    if (cell.type == CellType::hexa) {
+      e.reference = int(hexa_.size());
+      hexa_.push_back(hexa_reference(gather_nodes<8>(mesh.points, cell.nodes), int(c)));
+    } else {
+      e.reference = int(tetra_.size());
+      tetra_.push_back(tetra_reference(gather_nodes<4>(mesh.points, cell.nodes), int(c)));
+    }
+    elements_.push_back(e);
+  }
+  dof_index_.resize(3 * std::size_t(nodes));
+  for (int d = 0; d < 3 * nodes; ++d) {
+    if (prescribed[d] || !used[d / 3]) {
+      dof_index_[d] = -1 - int(prescribed_dofs_.size());
+      prescribed_dofs_.push_back(d);
+    } else {
+      dof_index_[d] = int(free_dofs_.size());
+      free_dofs_.push_back(d);
+    }
+  }
+  internal_ = Eigen::VectorXd::Zero(3 * nodes);
+  build_pattern();
+}
+
+void System::build_pattern() {
+  std::vector<Eigen::Triplet<double, int>> ff, fp;
+  const auto for_each_entry = [&](auto&& visit) {
+    for (const Element& e : elements_) {
+      const int n = 3 * node_count(e.type);
+      for (int c = 0; c < n; ++c) {
+        for (int r = 0; r < n; ++r) {
+          visit(e, r, c, dof_index_[3 * e.nodes[r / 3] + r % 3],
+                dof_index_[3 * e.nodes[c / 3] + c % 3]);
+        }
+      }
+    }
+  };
+  for_each_entry([&](const Element&, int, int, int row, int col) {
+    if (row >= 0 && col >= 0 && row >= col) ff.emplace_back(row, col, 0.0);
+    if (row >= 0 && col < 0) fp.emplace_back(row, -1 - col, 0.0);
+  });
+  k_ff_.resize(free_count(), free_count());
+  k_ff_.setFromTriplets(ff.begin(), ff.end());
+  k_ff_.makeCompressed();
+  k_fp_.resize(free_count(), prescribed_count());
+  k_fp_.setFromTriplets(fp.begin(), fp.end());
+  k_fp_.makeCompressed();
+
+  int offset = 0;
+  for (Element& e : elements_) {
+    e.slots = offset;
+    offset += 9 * node_count(e.type) * node_count(e.type);
+  }
+  slot_.assign(offset, -1);
+  for_each_entry([&](const Element& e, int r, int c, int row, int col) {
+    const int n = 3 * node_count(e.type);
+    int& slot = slot_[e.slots + r + n * c];
+    if (row >= 0 && col >= 0 && row >= col) slot = value_position(k_ff_, row, col);
+    if (row >= 0 && col < 0) slot = -2 - value_position(k_fp_, row, -1 - col);
+  });
+}
+
+Eigen::VectorXd System::body_force(const Vec3& force_density) const {
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(dof_count());
+  for (const Element& e : elements_) {
+    const int nn = node_count(e.type);
+    for (int a = 0; a < nn; ++a) {
+      const double share = e.type == CellType::hexa ? hexa_[e.reference].nodal_volume(a)
+                                                    : tetra_[e.reference].nodal_volume(a);
+      f.segment<3>(3 * e.nodes[a]) += share * force_density;
+    }
+  }
+  return f;
+}
+
+template <int NN, int NG>
+bool System::add_element(const ElementReference<NN, NG>& ref, const Element& element,
+                         const Eigen::VectorXd& u, bool with_tangent) {
+  Eigen::Matrix<double, 3, NN> ue;
+  for (int a = 0; a < NN; ++a) ue.col(a) = u.segment<3>(3 * element.nodes[a]);
+  ElementResult<NN> out;
+  if (!evaluate_element<NN, NG>(ref, ue, law_, with_tangent, out)) return false;
+  energy_ += out.energy;
+  for (int a = 0; a < NN; ++a) internal_.segment<3>(3 * element.nodes[a]) += out.force.col(a);
+  if (!with_tangent) return true;
+  const int* slot = slot_.data() + element.slots;
+  const double* value = out.stiffness.data();  // column-major, same order as the slots
+  double* ff = k_ff_.valuePtr();
+  double* fp = k_fp_.valuePtr();
+  for (int i = 0; i < 9 * NN * NN; ++i) {
+    if (slot[i] >= 0) {
+      ff[slot[i]] += value[i];
+    } else if (slot[i] <= -2) {
+      fp[-2 - slot[i]] += value[i];
+    }
+  }
+  return true;
+}
+
+bool System::evaluate(const Eigen::VectorXd& u, bool with_tangent) {
+  energy_ = 0.0;
+  internal_.setZero();
+  if (with_tangent) {
+    std::fill_n(k_ff_.valuePtr(), k_ff_.nonZeros(), 0.0);
+    std::fill_n(k_fp_.valuePtr(), k_fp_.nonZeros(), 0.0);
+  }
+  for (const Element& e : elements_) {
+    const bool ok = e.type == CellType::hexa
+                        ? add_element<8, 8>(hexa_[e.reference], e, u, with_tangent)
+                        : add_element<4, 1>(tetra_[e.reference], e, u, with_tangent);
+    if (!ok) return false;
+  }
+  return true;
+}
+
+Eigen::VectorXd System::gather(const Eigen::VectorXd& full, const std::vector<int>& dofs) const {
+  Eigen::VectorXd part(dofs.size());
+  for (std::size_t i = 0; i < dofs.size(); ++i) part[Eigen::Index(i)] = full[dofs[i]];
+  return part;
+}
+
+void System::scatter_add(const Eigen::VectorXd& part, const std::vector<int>& dofs,
+                         Eigen::VectorXd& full) const {
+  for (std::size_t i = 0; i < dofs.size(); ++i) full[dofs[i]] += part[Eigen::Index(i)];
+}
+
+}  // namespace phymul::fem
