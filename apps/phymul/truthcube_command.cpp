@@ -82,6 +82,10 @@ TruthcubeCommand add_truthcube_command(CLI::App& parent) {
   app->add_option("--poisson", s.study.poisson, "FEM Poisson ratio")
       ->check(CLI::Range(0.0, 0.4999))
       ->capture_default_str();
+  app->add_option("--tolerance", s.study.tolerance,
+                  "shape-memory equilibrium: largest residual force over K h")
+      ->check(CLI::Range(1e-12, 1e-2))
+      ->capture_default_str();
   app->add_flag("-q,--quiet", s.quiet, "only the table");
   return {app, [settings] { return run(*settings); }};
 }

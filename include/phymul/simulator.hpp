@@ -52,6 +52,10 @@ class Simulator {
   double kinetic_energy() const;  // J
   // Largest nodal force (N) on the free axes, less the part a volume constraint balances.
   double max_residual_force();
+  // Force (N) each position constraint exerts on its node, on the held axes (zero on free
+  // ones): minus the forces there, the pressure of the volume constraints included. At
+  // equilibrium they balance every load. Allocates: not for inside a step.
+  std::vector<Vec3> support_reactions() const;
   // Enclosed volume (m^3) of every component with a closed boundary, in component order
   // (NaN for the others).
   std::vector<double> component_volumes() const;
@@ -60,6 +64,7 @@ class Simulator {
   void step_verlet(double dt, double load_time);
   void step_newton_cotes(double dt, double load_time);
   void check_stability() const;
+  void accelerations(std::vector<Vec3>& a);
 
   Model model_;
   State state_;

@@ -26,4 +26,10 @@ double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_m
 void apply_position_constraints(const Model& model, std::span<Vec3> x, double load_time,
                                 std::span<Vec3> scratch);
 
+// Removes from the velocities their rate of change of each constrained volume, along the
+// same mass-weighted direction as the position projection (RATTLE's velocity stage), so
+// that the velocities are tangent to the constraint after the second half kick.
+void project_volume_velocities(const Model& model, std::span<const Vec3> x, std::span<Vec3> v,
+                               std::span<Vec3> scratch);
+
 }  // namespace phymul

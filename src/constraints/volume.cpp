@@ -64,4 +64,19 @@ double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_m
   return lambda;
 }
 
+void project_volume_velocities(const Model& model, std::span<const Vec3> x, std::span<Vec3> v,
+                               std::span<Vec3> grad) {
+  for (const VolumeConstraint& c : model.volumes) {
+    volume_gradient(c, x, grad);
+    double rate = 0.0, weight = 0.0;  // dV/dt and g.W.g
+    for (int i : c.nodes) {
+      rate += grad[i].dot(v[i]);
+      weight += grad[i].dot(grad[i].cwiseProduct(model.inverse_mass[i]));
+    }
+    if (weight == 0.0) continue;
+    const double mu = rate / weight;
+    for (int i : c.nodes) v[i] -= mu * grad[i].cwiseProduct(model.inverse_mass[i]);
+  }
+}
+
 }  // namespace phymul

@@ -62,23 +62,30 @@ void Simulator::step() {
 // correction over dt (the reaction of the constraint).
 void Simulator::step_verlet(double h, double load_time) {
   State& s = state_;
-  const double c = model_.damping;
-  const int n = model_.node_count();
-  for (int i = 0; i < n; ++i) {
-    const Vec3 a = model_.inverse_mass[i].cwiseProduct(s.f[i]) -
-                   c * s.v[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
+  std::vector<Vec3>& a = f_start_;  // accelerations, tangent to the volume constraints
+  accelerations(a);
+  for (int i = 0; i < model_.node_count(); ++i) {
     x_start_[i] = s.x[i];
-    s.x[i] += h * (s.v[i] + 0.5 * h * a);
+    s.x[i] += h * (s.v[i] + 0.5 * h * a[i]);
   }
   apply_position_constraints(model_, s.x, load_time, scratch_);
-  for (int i = 0; i < n; ++i) s.v[i] = (s.x[i] - x_start_[i]) / h;
+  for (int i = 0; i < model_.node_count(); ++i) s.v[i] = (s.x[i] - x_start_[i]) / h;
   compute_forces(model_, s, load_time);
   load_time_ = load_time;
-  for (int i = 0; i < n; ++i) {
-    const Vec3 a = model_.inverse_mass[i].cwiseProduct(s.f[i]) -
-                   c * s.v[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
-    s.v[i] += 0.5 * h * a;
-  }
+  accelerations(a);
+  for (int i = 0; i < model_.node_count(); ++i) s.v[i] += 0.5 * h * a[i];
+  project_volume_velocities(model_, s.x, s.v, scratch_);
+}
+
+// Without their part along the volume gradients (the pressure the projection would undo
+// anyway), accelerations keep the drift on the constraint: the projection then corrects only
+// second-order terms, and relaxation converges instead of stalling on that round trip.
+void Simulator::accelerations(std::vector<Vec3>& a) {
+  const double c = model_.damping;
+  for (int i = 0; i < model_.node_count(); ++i)
+    a[i] = model_.inverse_mass[i].cwiseProduct(state_.f[i]) -
+           c * state_.v[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
+  project_volume_velocities(model_, state_.x, a, scratch_);
 }
 
 // The paper's Newton-Cotes family: an Euler predictor, then the trapezoid rule on the
@@ -106,6 +113,7 @@ void Simulator::step_newton_cotes(double h, double load_time) {
   }
   apply_position_constraints(model_, s.x, load_time, scratch_);
   for (int i = 0; i < n; ++i) s.v[i] += (s.x[i] - f_start_[i]) / h;
+  project_volume_velocities(model_, s.x, s.v, scratch_);
   compute_forces(model_, s, load_time);
   load_time_ = load_time;
 }
@@ -159,6 +167,29 @@ double Simulator::max_residual_force() {
   double largest = 0.0;
   for (int i = 0; i < model_.node_count(); ++i) largest = std::max(largest, r[i].norm());
   return largest;
+}
+
+std::vector<Vec3> Simulator::support_reactions() const {
+  // Each volume constraint carries a pressure: the least-squares multiplier of its gradient
+  // against the forces on the free axes (what max_residual_force takes out).
+  std::vector<Vec3> reaction(state_.f);
+  std::vector<Vec3> grad(state_.x.size(), Vec3::Zero());
+  for (const VolumeConstraint& c : model_.volumes) {
+    volume_gradient(c, state_.x, grad);
+    double fg = 0.0, gg = 0.0;
+    for (int i : c.nodes) {
+      const Vec3 free_grad = grad[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
+      fg += state_.f[i].dot(free_grad);
+      gg += free_grad.squaredNorm();
+    }
+    if (gg == 0.0) continue;
+    for (int i : c.nodes) reaction[i] -= (fg / gg) * grad[i];
+  }
+  for (int i = 0; i < model_.node_count(); ++i) {
+    const Vec3 held = Vec3::Ones() - free_axes(model_.inverse_mass[i]);
+    reaction[i] = -reaction[i].cwiseProduct(held);
+  }
+  return reaction;
 }
 
 std::vector<double> Simulator::component_volumes() const {

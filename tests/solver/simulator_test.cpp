@@ -128,3 +128,33 @@ TEST(Simulator, InstabilityIsReportedWithNodeAndAdvice) {
 
 }  // namespace
 }  // namespace phymul
+
+namespace phymul {
+namespace {
+
+// A cube squeezed between a fixed base and a pushed top with its volume kept: at equilibrium
+// the supports' reactions, volume pressure included, balance (no other load acts).
+TEST(Simulator, SupportReactionsBalanceAtEquilibrium) {
+  Model model;
+  const int c = add_elastic_component(model, "cube",
+                                      make_box(Vec3(0.02, 0.02, 0.02), {3, 3, 3}, CellType::hexa),
+                                      testing::material(10.0));
+  add_volume_constraint(model, c);
+  add_fixed_nodes(model, model.components[c].node_sets.at("bottom"));
+  add_prescribed_displacement(model, {model.components[c].node_sets.at("top"),
+                                      {true, true, true},
+                                      Schedule::constant(Vec3(0, 0, -0.002))});
+  model.settings.tolerance = 1e-10;
+  finalize(model);
+  Simulator sim(model);
+  ASSERT_TRUE(sim.relax(0.0, 200000).converged);
+  const std::vector<Vec3> reaction = sim.support_reactions();
+  Vec3 top = Vec3::Zero(), bottom = Vec3::Zero();
+  for (int i : model.components[c].node_sets.at("top")) top += reaction[i];
+  for (int i : model.components[c].node_sets.at("bottom")) bottom += reaction[i];
+  EXPECT_LT(top.z(), -1e-3);  // the top plate pushes down on the cube
+  EXPECT_LT((top + bottom).norm(), 1e-6 * std::abs(top.z()));
+}
+
+}  // namespace
+}  // namespace phymul
