@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <iostream>
 
+#include "calibrate_command.hpp"
 #include "phymul/model.hpp"
 #include "phymul/run.hpp"
 #include "phymul/scene.hpp"
@@ -84,12 +85,14 @@ int main(int argc, char** argv) {
 
   app.add_subcommand("schema", "print the scene file reference (Markdown)");
   const auto truthcube = phymul::cli::add_truthcube_command(app);
+  const auto calibrate = phymul::cli::add_calibrate_command(app);
 
   CLI11_PARSE(app, argc, argv);
   try {
     if (*run_cmd) return run(scene_file, out_dir, quiet);
     if (*check_cmd) return check(scene_file);
     if (*truthcube.app) return truthcube.run();
+    if (*calibrate.app) return calibrate.run();
     std::cout << phymul::scene_reference_markdown();
     return 0;
   } catch (const std::exception& e) {
