@@ -19,6 +19,7 @@ namespace {
 constexpr int kInputError = 1;
 constexpr int kUnstable = 3;
 constexpr int kNotConverged = 4;
+constexpr int kInterrupted = 130;  // 128 + SIGINT, as shells report a Ctrl-C
 
 int report_scene_error(const phymul::SceneError& e) {
   for (const auto& d : e.diagnostics()) std::cerr << d.str() << '\n';
@@ -46,6 +47,7 @@ int run(const std::string& file, const std::string& out, bool quiet) {
   try {
     const phymul::Scene scene = phymul::load_scene(file);
     phymul::RunOptions options{out, !quiet && isatty(fileno(stderr))};
+    phymul::install_interrupt_handlers();
     const phymul::RunReport r = phymul::run_scene(scene, options);
     if (!quiet)
       std::cout << fmt::format(
@@ -60,6 +62,11 @@ int run(const std::string& file, const std::string& out, bool quiet) {
     if (r.status == "not-converged") {
       std::cerr << "error: " << r.message << '\n';
       return kNotConverged;
+    }
+    if (r.status == "interrupted") {
+      std::cerr << fmt::format("{}: {} after {} steps ({:.4g} s simulated); {} frames in {}\n",
+                               file, r.message, r.steps, r.simulated_time, r.frames, out);
+      return kInterrupted;
     }
     return 0;
   } catch (const phymul::SceneError& e) {
@@ -87,6 +94,20 @@ int main(int argc, char** argv) {
   const auto truthcube = phymul::cli::add_truthcube_command(app);
   const auto calibrate = phymul::cli::add_calibrate_command(app);
 
+  // CLI11 alone reports an unknown command as "A subcommand is required": name it instead.
+  if (argc > 1 && argv[1][0] != '-') {
+    std::string known;
+    bool found = false;
+    for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+      found = found || sub->check_name(argv[1]);
+      known += (known.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!found) {
+      std::cerr << fmt::format(
+          "error: unknown command '{}' (expected one of {}); run with --help\n", argv[1], known);
+      return kInputError;
+    }
+  }
   CLI11_PARSE(app, argc, argv);
   try {
     if (*run_cmd) return run(scene_file, out_dir, quiet);

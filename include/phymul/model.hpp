@@ -52,6 +52,34 @@ struct PrescribedDisplacement {
   Schedule displacement;  // m, from the rest position
 };
 
+// A follower load (the paper's probe pressure): p (Pa, the x component of the schedule)
+// pushes each face into the body, along minus its CURRENT outward normal, shared equally by
+// its three nodes.
+struct PressureLoad {
+  int component = 0;
+  std::vector<Triangle> faces;  // global ids, oriented outward (from Component::boundary)
+  Schedule pressure;            // Pa in x; positive pushes into the body
+};
+
+// A rigid analytic shape the nodes may not enter (or, keep_inside, may not leave), enforced
+// by projection after prescribed displacements and before volume constraints.
+struct RigidObstacle {
+  // plane: the half-space behind `point` opposite to `axis` (the outward normal, free side);
+  // sphere: centre `point`; capsule: the points within `radius` of the segment from `point`
+  // to point + length * axis (both ends rounded); rounded_cylinder: an endorectal probe, a
+  // capsule whose base end extends to infinity backwards (open there, rounded at the tip).
+  enum class Shape { plane, sphere, capsule, rounded_cylinder };
+  Shape shape = Shape::plane;
+  Vec3 point = Vec3::Zero();  // m, at load time 0
+  Vec3 axis = Vec3::UnitZ();  // normalised by add_rigid_obstacle
+  double radius = 0.0;        // m
+  double length = 0.0;        // m
+  Schedule motion;            // m, translation of the shape over time (empty: fixed)
+  bool keep_inside = false;   // a container instead of an obstacle
+  std::vector<int> nodes;     // global ids it acts on; empty = all nodes
+  double friction = 0.0;      // Coulomb coefficient; not implemented yet: must be 0
+};
+
 struct Component {
   std::string name;
   int first_node = 0, node_count = 0;
@@ -71,6 +99,8 @@ struct Model {
   std::vector<VolumeConstraint> volumes;
   std::vector<AppliedForce> forces;
   std::vector<PrescribedDisplacement> prescribed;
+  std::vector<PressureLoad> pressures;
+  std::vector<RigidObstacle> obstacles;
   // Per node and axis: 1/m where the node is free to move along that axis, 0 where a
   // position constraint holds it. The projection of global constraints moves nodes by it.
   std::vector<Vec3> inverse_mass;
@@ -89,6 +119,12 @@ void add_volume_constraint(Model& model, int component);
 void add_fixed_nodes(Model& model, const std::vector<int>& nodes);
 void add_prescribed_displacement(Model& model, PrescribedDisplacement prescribed);
 void add_applied_force(Model& model, AppliedForce force);
+void add_pressure(Model& model, PressureLoad pressure);
+void add_rigid_obstacle(Model& model, RigidObstacle obstacle);
+// The boundary faces of `component` whose rest centroid lies within `radius` of the infinite
+// line through axis_point along axis_direction (the paper's cylinder-shaped probe pressure).
+std::vector<Triangle> faces_in_cylinder(const Model& model, int component, const Vec3& axis_point,
+                                        const Vec3& axis_direction, double radius);
 // Recomputes derived arrays (inverse_mass); call after the last add_*.
 void finalize(Model& model);
 
@@ -106,5 +142,10 @@ struct State {
 };
 
 State make_state(const Model& model);
+
+// Force (N) the obstacle exerts on the body: minus State::f, on the free axes, summed over the
+// nodes it acts on that touch its surface (within 1e-12 m) at State::time. Valid at
+// equilibrium only (after relax), where the contact force is all that balances them.
+Vec3 obstacle_force(const Model& model, const State& state, int obstacle);
 
 }  // namespace phymul

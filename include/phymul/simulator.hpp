@@ -65,13 +65,15 @@ class Simulator {
   void step_newton_cotes(double dt, double load_time);
   void check_stability() const;
   void accelerations(std::vector<Vec3>& a);
+  void remove_contact_forces(std::vector<Vec3>& r) const;
 
   Model model_;
   State state_;
   double dt_ = 0.0;
-  double load_time_ = 0.0;                                   // time at which State::f was evaluated
-  std::vector<Vec3> x_start_, v_start_, f_start_, scratch_;  // sized once: no allocation in a step
-  double size_scale_ = 1.0;                                  // m, diagonal of the rest bounding box
+  double load_time_ = 0.0;  // time at which State::f was evaluated
+  // Sized once: no allocation in a step.
+  std::vector<Vec3> x_start_, v_start_, f_start_, a1_, scratch_;
+  double size_scale_ = 1.0;  // m, diagonal of the rest bounding box
 };
 
 }  // namespace phymul

@@ -21,8 +21,8 @@ void volume_gradient(const VolumeConstraint& c, std::span<const Vec3> x, std::sp
 double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
                       std::span<Vec3> x, std::span<Vec3> grad);
 
-// All position constraints in the DESIGN's order: prescribed, then volumes (a few
-// Gauss-Seidel sweeps when surfaces share nodes).
+// All position constraints in the DESIGN's order: prescribed, rigid obstacles (contact.hpp),
+// then volumes (a few Gauss-Seidel sweeps when surfaces share nodes).
 void apply_position_constraints(const Model& model, std::span<Vec3> x, double load_time,
                                 std::span<Vec3> scratch);
 

@@ -1,4 +1,5 @@
 #include "constraints/constraints.hpp"
+#include "constraints/contact.hpp"
 
 namespace phymul {
 
@@ -14,6 +15,9 @@ void apply_prescribed(const Model& model, std::span<Vec3> x, double load_time) {
 void apply_position_constraints(const Model& model, std::span<Vec3> x, double load_time,
                                 std::span<Vec3> scratch) {
   apply_prescribed(model, x, load_time);
+  // Contact before volumes: the volume projection moves surface nodes by a few ulps of
+  // their size only, while an obstacle may push a node by millimetres.
+  apply_contacts(model, x, load_time);
   // One pass is exact for disjoint surfaces; shared nodes need a few sweeps.
   const int sweeps = model.volumes.size() > 1 ? 4 : 1;
   for (int sweep = 0; sweep < sweeps; ++sweep)

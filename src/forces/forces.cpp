@@ -1,5 +1,6 @@
 #include "forces/forces.hpp"
 
+#include "forces/pressure.hpp"
 #include "forces/shape_memory.hpp"
 
 namespace phymul {
@@ -10,6 +11,7 @@ void compute_forces(const Model& model, State& s, double load_time) {
     const Vec3 fi = load.force.at(load_time);
     for (int i : load.nodes) s.f[i] += fi;
   }
+  for (const PressureLoad& load : model.pressures) add_pressure_forces(load, s.x, s.f, load_time);
   s.shape_memory_energy = 0.0;
   size_t first_rotation = 0;
   for (const ShapeMemory& m : model.shape_memory) {

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <yaml-cpp/depthguard.h>
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -98,10 +99,48 @@ std::string top_level_keys() {
   return keys;
 }
 
+// Sees the document stream without building it, to notice yaml-cpp 0.7 looping on stray flow
+// punctuation (a lone ',' yields empty documents forever: yaml-cpp issue #1040).
+class DocumentCounter : public YAML::EventHandler {
+ public:
+  YAML::Mark last;
+  void OnDocumentStart(const YAML::Mark& mark) override { last = mark; }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
+};
+
+// False (with where it stalled) when the parser would hand out documents without end: every
+// real document consumes at least one character.
+bool document_stream_ends(const std::string& text, YAML::Mark& stall) {
+  std::istringstream in(text);
+  YAML::Parser parser(in);
+  DocumentCounter counter;
+  for (size_t documents = 0; documents <= text.size() + 1; ++documents)
+    if (!parser.HandleNextDocument(counter)) return true;
+  stall = counter.last;
+  return false;
+}
+
 std::optional<YAML::Node> load_yaml(SceneContext& context, const std::string& text) {
   if (!check_text(context, text)) return std::nullopt;
   std::vector<YAML::Node> documents;
   try {
+    YAML::Mark stall;
+    if (!document_stream_ends(text, stall)) {
+      context.error(context.loc(stall),
+                    "YAML syntax error: stray flow punctuation (such as a lone ',') outside any "
+                    "[list] or {map}");
+      return std::nullopt;
+    }
     documents = YAML::LoadAll(text);
   } catch (const YAML::DeepRecursion& e) {
     context.error(context.loc(e.mark), "YAML nesting is too deep");

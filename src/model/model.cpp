@@ -110,6 +110,36 @@ void add_applied_force(Model& model, AppliedForce force) {
   model.forces.push_back(std::move(force));
 }
 
+void add_pressure(Model& model, PressureLoad pressure) {
+  if (pressure.component < 0 || pressure.component >= int(model.components.size()))
+    throw std::invalid_argument(
+        fmt::format("pressure: component {} is out of range ({} components)", pressure.component,
+                    model.components.size()));
+  for (const Triangle& t : pressure.faces)
+    check_node_ids(model, std::vector<int>(t.begin(), t.end()), "pressure");
+  model.pressures.push_back(std::move(pressure));
+}
+
+void add_rigid_obstacle(Model& model, RigidObstacle obstacle) {
+  using Shape = RigidObstacle::Shape;
+  check_node_ids(model, obstacle.nodes, "rigid obstacle");
+  const bool needs_axis = obstacle.shape != Shape::sphere;
+  if (needs_axis && !(obstacle.axis.norm() > 0.0))
+    throw std::invalid_argument("rigid obstacle: 'axis' must be a non-zero vector");
+  if (obstacle.axis.norm() > 0.0) obstacle.axis.normalize();
+  if (obstacle.shape != Shape::plane && !(obstacle.radius > 0.0))
+    throw std::invalid_argument(
+        fmt::format("rigid obstacle: 'radius' must be > 0 m (got {})", obstacle.radius));
+  if ((obstacle.shape == Shape::capsule || obstacle.shape == Shape::rounded_cylinder) &&
+      !(obstacle.length >= 0.0))
+    throw std::invalid_argument(
+        fmt::format("rigid obstacle: 'length' must be >= 0 m (got {})", obstacle.length));
+  if (obstacle.friction != 0.0)
+    throw std::invalid_argument(
+        "rigid obstacle: friction is not implemented yet; contact is frictionless (set 0)");
+  model.obstacles.push_back(std::move(obstacle));
+}
+
 void finalize(Model& model) {
   model.inverse_mass.assign(model.rest_position.size(), Vec3::Zero());
   for (int i = 0; i < model.node_count(); ++i) {

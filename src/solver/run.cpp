@@ -4,14 +4,27 @@
 
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <fstream>
+#include <stdexcept>
 
 #include "io/results.hpp"
 #include "phymul/simulator.hpp"
 
 namespace phymul {
 namespace {
+
+// Set from signal handlers: only a volatile sig_atomic_t store is async-signal-safe.
+volatile std::sig_atomic_t g_interrupt = 0;
+
+extern "C" void on_interrupt_signal(int) { g_interrupt = 1; }
+
+// Thrown from the static relaxation's progress callback to stop it between iterations.
+struct Interrupted {};
+
+constexpr const char* kInterruptedMessage =
+    "interrupted by a signal; the results up to the last step are written";
 
 class ProgressLine {
  public:
@@ -40,7 +53,26 @@ class ProgressLine {
 
 }  // namespace
 
+void request_interrupt() noexcept { g_interrupt = 1; }
+void clear_interrupt() noexcept { g_interrupt = 0; }
+bool interrupt_requested() noexcept { return g_interrupt != 0; }
+
+void install_interrupt_handlers() {
+  struct sigaction action {};
+  action.sa_handler = on_interrupt_signal;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESETHAND;  // a second signal ends the process at once
+  for (int sig : {SIGINT, SIGTERM})
+    if (sigaction(sig, &action, nullptr) != 0)
+      throw std::runtime_error(fmt::format("cannot install the handler for signal {}", sig));
+}
+
 RunReport run_scene(const Scene& scene, const RunOptions& options) {
+  std::error_code ec;
+  if (std::filesystem::exists(options.output_dir, ec) &&
+      !std::filesystem::is_directory(options.output_dir, ec))
+    throw std::runtime_error(fmt::format("output directory '{}' exists and is not a directory",
+                                         options.output_dir.string()));
   Simulator sim(compile_scene(scene));
   const Model& model = sim.model();
   const SimulationSpec& settings = model.settings;
@@ -58,14 +90,26 @@ RunReport run_scene(const Scene& scene, const RunOptions& options) {
   try {
     if (settings.mode == SolveMode::static_equilibrium) {
       report.mode = "static";
-      const StaticResult r = sim.solve_static([&](long it, double residual) {
-        progress.show(double(it) / double(settings.max_iterations),
-                      fmt::format("iteration {}  residual {:.3g} N", it, residual));
-      });
-      report.steps = r.iterations;
-      report.converged = r.converged;
-      report.residual = r.residual;
-      if (!r.converged) {
+      StaticResult r;
+      bool interrupted = interrupt_requested();
+      if (!interrupted) {
+        try {
+          r = sim.solve_static([&](long it, double residual) {
+            if (interrupt_requested()) throw Interrupted{};
+            progress.show(double(it) / double(settings.max_iterations),
+                          fmt::format("iteration {}  residual {:.3g} N", it, residual));
+          });
+        } catch (const Interrupted&) {
+          interrupted = true;
+        }
+      }
+      report.steps = interrupted ? sim.state().step : r.iterations;
+      report.converged = interrupted ? false : r.converged;
+      report.residual = interrupted ? sim.max_residual_force() : r.residual;
+      if (interrupted) {
+        report.status = "interrupted";
+        report.message = kInterruptedMessage;
+      } else if (!r.converged) {
         report.status = "not-converged";
         report.message = fmt::format(
             "no equilibrium after {} iterations: the largest residual force is {:.3g} N, above "
@@ -82,21 +126,31 @@ RunReport run_scene(const Scene& scene, const RunOptions& options) {
       const double interval = scene.output.interval;
       double next_frame = interval > 0 ? interval : settings.duration;
       const long monitor_every = std::max(1L, steps / 2000);
+      long done = 0;
       for (long k = 1; k <= steps; ++k) {
         sim.step();
+        done = k;
         const double t = sim.state().time;
-        if (k % monitor_every == 0 || k == steps) out.monitor(sim);
-        if (k == steps || t >= next_frame - 0.5 * sim.dt()) {
+        // Interrupted: this step is the last one, with its monitor row and its frame.
+        const bool last = k == steps || interrupt_requested();
+        if (k % monitor_every == 0 || last) out.monitor(sim);
+        if (last || t >= next_frame - 0.5 * sim.dt()) {
           out.frame(sim);
           while (next_frame <= t + 0.5 * sim.dt()) next_frame += interval > 0 ? interval : 1e300;
         }
+        if (last) break;
         if ((k & 63) == 0)
           progress.show(double(k) / double(steps), fmt::format("t = {:.4g} s  step {}", t, k));
       }
-      progress.show(1.0, fmt::format("t = {:.4g} s  step {}", sim.state().time, steps), true);
-      report.steps = steps;
+      progress.show(double(done) / double(steps),
+                    fmt::format("t = {:.4g} s  step {}", sim.state().time, done), true);
+      report.steps = done;
       report.residual = sim.max_residual_force();
-      report.converged = true;
+      report.converged = done == steps;
+      if (done < steps) {
+        report.status = "interrupted";
+        report.message = kInterruptedMessage;
+      }
     }
   } catch (const InstabilityError& e) {
     report.status = "unstable";

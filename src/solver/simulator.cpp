@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "constraints/constraints.hpp"
+#include "constraints/contact.hpp"
 #include "forces/forces.hpp"
 
 namespace phymul {
@@ -39,6 +40,7 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
   v_start_.assign(n, Vec3::Zero());
   f_start_.assign(n, Vec3::Zero());
   scratch_.assign(n, Vec3::Zero());
+  a1_.assign(n, Vec3::Zero());
   size_scale_ = bounding_diagonal(model_.rest_position);
   const double stable = stable_time_step(model_);
   dt_ = model_.settings.dt ? *model_.settings.dt : model_.settings.dt_safety * stable;
@@ -92,27 +94,25 @@ void Simulator::accelerations(std::vector<Vec3>& a) {
 // accelerations at both ends (second order).
 void Simulator::step_newton_cotes(double h, double load_time) {
   State& s = state_;
-  const double c = model_.damping;
   const int n = model_.node_count();
+  std::vector<Vec3>& a0 = f_start_;
+  accelerations(a0);
   for (int i = 0; i < n; ++i) {
     x_start_[i] = s.x[i];
     v_start_[i] = s.v[i];
-    f_start_[i] = model_.inverse_mass[i].cwiseProduct(s.f[i]) -
-                  c * s.v[i].cwiseProduct(free_axes(model_.inverse_mass[i]));  // a0
     s.x[i] += h * s.v[i];
-    s.v[i] += h * f_start_[i];
+    s.v[i] += h * a0[i];
   }
   apply_prescribed(model_, s.x, load_time);
   compute_forces(model_, s, load_time);
+  accelerations(a1_);
   for (int i = 0; i < n; ++i) {
-    const Vec3 a1 = model_.inverse_mass[i].cwiseProduct(s.f[i]) -
-                    c * s.v[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
-    s.v[i] = v_start_[i] + 0.5 * h * (f_start_[i] + a1);
+    s.v[i] = v_start_[i] + 0.5 * h * (a0[i] + a1_[i]);
     s.x[i] = x_start_[i] + 0.5 * h * (v_start_[i] + s.v[i]);
-    f_start_[i] = s.x[i];  // a0 is spent: keep the unconstrained position instead
+    a1_[i] = s.x[i];  // spent: keep the unconstrained position instead
   }
   apply_position_constraints(model_, s.x, load_time, scratch_);
-  for (int i = 0; i < n; ++i) s.v[i] += (s.x[i] - f_start_[i]) / h;
+  for (int i = 0; i < n; ++i) s.v[i] += (s.x[i] - a1_[i]) / h;
   project_volume_velocities(model_, s.x, s.v, scratch_);
   compute_forces(model_, s, load_time);
   load_time_ = load_time;
@@ -164,9 +164,29 @@ double Simulator::max_residual_force() {
     const double pressure = rg / gg;  // the part of the force the constraint balances
     for (int i : c.nodes) r[i] -= pressure * scratch_[i];
   }
+  remove_contact_forces(r);
   double largest = 0.0;
   for (int i = 0; i < model_.node_count(); ++i) largest = std::max(largest, r[i].norm());
   return largest;
+}
+
+// A node touching an obstacle can be pushed into it with any force: that part of its
+// residual is the contact's reaction, not an imbalance.
+void Simulator::remove_contact_forces(std::vector<Vec3>& r) const {
+  constexpr double kTouching = 1e-12;  // m, as obstacle_force counts contact
+  auto remove = [&](const RigidObstacle& o, int i) {
+    const SurfaceDistance d = obstacle_distance(o, state_.x[i], load_time_);
+    if (std::abs(d.distance) > kTouching) return;
+    const Vec3 push = o.keep_inside ? Vec3(-d.normal) : d.normal;  // how the obstacle can push
+    const double into = r[i].dot(push);
+    if (into < 0.0) r[i] -= into * push;
+  };
+  for (const RigidObstacle& o : model_.obstacles) {
+    if (o.nodes.empty())
+      for (int i = 0; i < model_.node_count(); ++i) remove(o, i);
+    else
+      for (int i : o.nodes) remove(o, i);
+  }
 }
 
 std::vector<Vec3> Simulator::support_reactions() const {
@@ -204,6 +224,7 @@ StaticResult Simulator::relax(double load_time, long max_iterations,
   StaticResult result;
   apply_position_constraints(model_, state_.x, load_time, scratch_);
   compute_forces(model_, state_, load_time);
+  load_time_ = load_time;
   double previous_kinetic = 0.0;
   for (;;) {
     result.residual = max_residual_force();

@@ -1,0 +1,126 @@
+#include "constraints/contact.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace phymul {
+namespace {
+
+using Shape = RigidObstacle::Shape;
+
+// A unit vector perpendicular to axis (the normal of a point on a medial axis is arbitrary).
+Vec3 any_perpendicular(const Vec3& axis) {
+  const Vec3 trial = std::abs(axis.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
+  return axis.cross(trial).normalized();
+}
+
+// Distance to a round shape: the ball of `radius` around the point `core` of its core.
+SurfaceDistance around(const Vec3& x, const Vec3& core, double radius, const Vec3& axis) {
+  const Vec3 r = x - core;
+  const double d = r.norm();
+  return {d - radius, d > 0.0 ? Vec3(r / d) : any_perpendicular(axis)};
+}
+
+// Closest point of the core segment (or, with an infinite base, ray) to x.
+Vec3 core_point(const RigidObstacle& o, const Vec3& base, const Vec3& x) {
+  const double lowest = o.shape == Shape::capsule ? 0.0 : -std::numeric_limits<double>::infinity();
+  const double t = std::clamp((x - base).dot(o.axis), lowest, o.length);
+  return base + t * o.axis;
+}
+
+bool violates(const RigidObstacle& o, double distance) {
+  return o.keep_inside ? distance > 0.0 : distance < 0.0;
+}
+
+bool violates_at(const RigidObstacle& o, const Vec3& x, double load_time) {
+  return violates(o, obstacle_distance(o, x, load_time).distance);
+}
+
+// Moves one node onto the surface along its free axes P. A free node goes straight to the
+// closest point (exact for every shape). A partly held one moves along P n0 (n0: the normal
+// where it starts): Newton steps until it is out, then bisection back to the surface, since
+// on a curved surface a linearised step may overshoot far past it.
+void project_node(const RigidObstacle& o, const Vec3& free_axes, Vec3& x, double load_time) {
+  const SurfaceDistance s = obstacle_distance(o, x, load_time);
+  if (!violates(o, s.distance)) return;
+  if (free_axes == Vec3::Ones()) {
+    x -= s.distance * s.normal;
+    return;
+  }
+  const Vec3 direction = s.normal.cwiseProduct(free_axes);
+  if (s.normal.dot(direction) < 1e-12) return;  // the normal lies on held axes: cannot move
+  double inside = 0.0, outside = 0.0;           // step lengths along direction
+  for (int pass = 0; pass < 8 && outside == 0.0; ++pass) {
+    const SurfaceDistance at = obstacle_distance(o, x + inside * direction, load_time);
+    const double rate = at.normal.dot(direction);
+    const double next = rate > 0.0 ? inside - at.distance / rate : 2.0 * inside;
+    if (violates_at(o, x + next * direction, load_time))
+      inside = next;
+    else
+      outside = next;
+  }
+  if (outside == 0.0) return;  // no way out along the free axes: leave it (best effort)
+  for (int it = 0; it < 60 && outside - inside > 1e-15 * outside; ++it) {
+    const double middle = 0.5 * (inside + outside);
+    (violates_at(o, x + middle * direction, load_time) ? inside : outside) = middle;
+  }
+  x += outside * direction;
+}
+
+Vec3 free_axes_of(const Vec3& inverse_mass) {
+  return (inverse_mass.array() > 0.0).cast<double>().matrix();
+}
+
+}  // namespace
+
+SurfaceDistance obstacle_distance(const RigidObstacle& o, const Vec3& x, double load_time) {
+  const Vec3 base = o.point + o.motion.at(load_time);
+  switch (o.shape) {
+    case Shape::plane:
+      return {(x - base).dot(o.axis), o.axis};
+    case Shape::sphere:
+      return around(x, base, o.radius, o.axis);
+    case Shape::capsule:
+    case Shape::rounded_cylinder:
+      return around(x, core_point(o, base, x), o.radius, o.axis);
+  }
+  return {};
+}
+
+Vec3 closest_surface_point(const RigidObstacle& o, const Vec3& x, double load_time) {
+  const SurfaceDistance s = obstacle_distance(o, x, load_time);
+  return x - s.distance * s.normal;
+}
+
+void project_obstacle(const RigidObstacle& o, std::span<const Vec3> inverse_mass, std::span<Vec3> x,
+                      double load_time) {
+  if (o.nodes.empty()) {
+    for (size_t i = 0; i < x.size(); ++i)
+      project_node(o, free_axes_of(inverse_mass[i]), x[i], load_time);
+  } else {
+    for (int i : o.nodes) project_node(o, free_axes_of(inverse_mass[i]), x[i], load_time);
+  }
+}
+
+void apply_contacts(const Model& model, std::span<Vec3> x, double load_time) {
+  for (const RigidObstacle& o : model.obstacles)
+    project_obstacle(o, model.inverse_mass, x, load_time);
+}
+
+Vec3 obstacle_force(const Model& model, const State& state, int obstacle) {
+  const RigidObstacle& o = model.obstacles.at(size_t(obstacle));
+  Vec3 force = Vec3::Zero();
+  auto add = [&](int i) {
+    const double d = obstacle_distance(o, state.x[i], state.time).distance;
+    if (std::abs(d) <= 1e-12) force -= state.f[i].cwiseProduct(free_axes_of(model.inverse_mass[i]));
+  };
+  if (o.nodes.empty()) {
+    for (int i = 0; i < model.node_count(); ++i) add(i);
+  } else {
+    for (int i : o.nodes) add(i);
+  }
+  return force;
+}
+
+}  // namespace phymul

@@ -1,0 +1,15 @@
+// Pressure on boundary faces as a follower load (the paper's probe pressure).
+#pragma once
+
+#include <span>
+
+#include "phymul/model.hpp"
+
+namespace phymul {
+
+// Adds to f the pressure of load at load_time: on each face, -p * (area-weighted outward
+// normal of the current triangle) / 3 on each of its nodes. Allocates nothing.
+void add_pressure_forces(const PressureLoad& load, std::span<const Vec3> x, std::span<Vec3> f,
+                         double load_time);
+
+}  // namespace phymul

@@ -1,0 +1,240 @@
+#include "constraints/contact.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "phymul/simulator.hpp"
+#include "support/models.hpp"
+
+namespace phymul {
+namespace {
+
+using Shape = RigidObstacle::Shape;
+
+RigidObstacle shape(Shape kind, const Vec3& point, const Vec3& axis, double radius = 0.0,
+                    double length = 0.0) {
+  RigidObstacle o;
+  o.shape = kind;
+  o.point = point;
+  o.axis = axis.normalized();
+  o.radius = radius;
+  o.length = length;
+  return o;
+}
+
+void expect_vec_near(const Vec3& a, const Vec3& b, double tol) {
+  EXPECT_LE((a - b).norm(), tol) << a.transpose() << " vs " << b.transpose();
+}
+
+TEST(ContactGeometry, Plane) {
+  const RigidObstacle o = shape(Shape::plane, Vec3(0, 0, 1), Vec3(0, 0, 2));
+  EXPECT_DOUBLE_EQ(obstacle_distance(o, Vec3(3, 4, 1.5), 0).distance, 0.5);
+  EXPECT_DOUBLE_EQ(obstacle_distance(o, Vec3(3, 4, 0.25), 0).distance, -0.75);
+  expect_vec_near(closest_surface_point(o, Vec3(3, 4, 0.25), 0), Vec3(3, 4, 1), 1e-15);
+  expect_vec_near(obstacle_distance(o, Vec3(3, 4, 0.25), 0).normal, Vec3::UnitZ(), 0);
+}
+
+TEST(ContactGeometry, SphereFollowsItsMotion) {
+  RigidObstacle o = shape(Shape::sphere, Vec3(1, 0, 0), Vec3::UnitZ(), 0.5);
+  o.motion = Schedule{{0.0, 2.0}, {Vec3::Zero(), Vec3(0, 2, 0)}};
+  EXPECT_DOUBLE_EQ(obstacle_distance(o, Vec3(1, 1, 0.25), 1.0).distance, -0.25);  // centre (1,1,0)
+  expect_vec_near(closest_surface_point(o, Vec3(1, 1, 0.25), 1.0), Vec3(1, 1, 0.5), 1e-15);
+  EXPECT_DOUBLE_EQ(obstacle_distance(o, Vec3(4, 1, 0), 1.0).distance, 2.5);
+  // The centre itself: any direction is closest; the point lands on the surface.
+  const Vec3 c = closest_surface_point(o, Vec3(1, 1, 0), 1.0);
+  EXPECT_NEAR((c - Vec3(1, 1, 0)).norm(), 0.5, 1e-15);
+}
+
+TEST(ContactGeometry, CapsuleSideEndsAndAxis) {
+  const RigidObstacle o = shape(Shape::capsule, Vec3::Zero(), Vec3::UnitZ(), 0.1, 1.0);
+  // Beside the segment: radial.
+  EXPECT_NEAR(obstacle_distance(o, Vec3(0.05, 0, 0.5), 0).distance, -0.05, 1e-15);
+  expect_vec_near(closest_surface_point(o, Vec3(0.05, 0, 0.5), 0), Vec3(0.1, 0, 0.5), 1e-15);
+  // Near the far tip and behind the base: both ends are hemispheres.
+  expect_vec_near(closest_surface_point(o, Vec3(0, 0, 1.05), 0), Vec3(0, 0, 1.1), 1e-15);
+  expect_vec_near(closest_surface_point(o, Vec3(0, 0, -0.02), 0), Vec3(0, 0, -0.1), 1e-15);
+  EXPECT_NEAR(obstacle_distance(o, Vec3(0, 0, -0.5), 0).distance, 0.4, 1e-15);
+  const Vec3 tip = Vec3(0.06, 0, 1.08);  // on the tip's hemisphere side, inside
+  const Vec3 q = closest_surface_point(o, tip, 0);
+  EXPECT_NEAR((q - Vec3(0, 0, 1)).norm(), 0.1, 1e-15);
+  expect_vec_near((q - Vec3(0, 0, 1)).normalized(), (tip - Vec3(0, 0, 1)).normalized(), 1e-15);
+  // On the axis: any radial direction is closest.
+  const Vec3 a = closest_surface_point(o, Vec3(0, 0, 0.3), 0);
+  EXPECT_NEAR(a.z(), 0.3, 1e-15);
+  EXPECT_NEAR(a.head<2>().norm(), 0.1, 1e-15);
+}
+
+TEST(ContactGeometry, RoundedCylinderIsOpenBackwards) {
+  // A probe along +y from (0,-1,0), 0.5 long, radius 0.1: its tip centre is at (0,-0.5,0).
+  const RigidObstacle o = shape(Shape::rounded_cylinder, Vec3(0, -1, 0), Vec3::UnitY(), 0.1, 0.5);
+  // Far behind the base it is still a cylinder (a capsule would end there).
+  EXPECT_NEAR(obstacle_distance(o, Vec3(0, -50, 0.02), 0).distance, -0.08, 1e-14);
+  expect_vec_near(closest_surface_point(o, Vec3(0, -50, 0.02), 0), Vec3(0, -50, 0.1), 1e-14);
+  EXPECT_NEAR(obstacle_distance(o, Vec3(0.3, -3, 0), 0).distance, 0.2, 1e-15);
+  // Near the rounded tip.
+  expect_vec_near(closest_surface_point(o, Vec3(0, -0.45, 0), 0), Vec3(0, -0.4, 0), 1e-15);
+  EXPECT_NEAR(obstacle_distance(o, Vec3(0, -0.3, 0), 0).distance, 0.1, 1e-15);
+  const Vec3 q = closest_surface_point(o, Vec3(0.03, -0.46, 0.04), 0);
+  EXPECT_NEAR((q - Vec3(0, -0.5, 0)).norm(), 0.1, 1e-15);
+}
+
+TEST(ContactProjection, MovesOnlyAlongFreeAxes) {
+  const RigidObstacle sphere = shape(Shape::sphere, Vec3::Zero(), Vec3::UnitZ(), 1.0);
+  std::vector<Vec3> x{Vec3(0.3, 0.4, 0.1), Vec3(0.3, 0.4, 0.1), Vec3(0.3, 0.4, 0.1)};
+  const std::vector<Vec3> w{Vec3::Ones(), Vec3(0, 0, 1), Vec3::Zero()};
+  project_obstacle(sphere, w, x, 0.0);
+  expect_vec_near(x[0], Vec3(0.3, 0.4, 0.1) / Vec3(0.3, 0.4, 0.1).norm(), 1e-15);  // closest
+  EXPECT_EQ(x[1].x(), 0.3);  // only z may move: up to the surface
+  EXPECT_EQ(x[1].y(), 0.4);
+  EXPECT_NEAR(x[1].z(), std::sqrt(0.75), 1e-15);  // a Newton step alone would overshoot
+  EXPECT_GE(obstacle_distance(sphere, x[1], 0.0).distance, 0.0);
+  EXPECT_EQ(x[2], Vec3(0.3, 0.4, 0.1));  // fully held: left alone
+  // A node whose normal has no free component cannot get out: it is left where it is.
+  std::vector<Vec3> stuck{Vec3(0.3, 0.4, 0.0)};
+  project_obstacle(sphere, std::vector<Vec3>{Vec3(0, 0, 1)}, stuck, 0.0);
+  EXPECT_EQ(stuck[0], Vec3(0.3, 0.4, 0.0));
+}
+
+TEST(ContactProjection, KeepInsideHoldsNodesInAContainer) {
+  RigidObstacle box_wall = shape(Shape::sphere, Vec3::Zero(), Vec3::UnitZ(), 1.0);
+  box_wall.keep_inside = true;
+  std::vector<Vec3> x{Vec3(0, 0, 2), Vec3(0, 0.5, 0)};
+  const std::vector<Vec3> w(2, Vec3::Ones());
+  project_obstacle(box_wall, w, x, 0.0);
+  expect_vec_near(x[0], Vec3(0, 0, 1), 1e-15);
+  EXPECT_EQ(x[1], Vec3(0, 0.5, 0));
+}
+
+TEST(ContactProjection, BuilderChecksItsInput) {
+  Model model = testing::single_component(
+      make_box(Vec3(0.01, 0.01, 0.01), {1, 1, 1}, CellType::hexa), testing::material(1.0));
+  EXPECT_THROW(add_rigid_obstacle(model, shape(Shape::sphere, Vec3::Zero(), Vec3::UnitZ(), 0.0)),
+               std::invalid_argument);
+  RigidObstacle bad_node = shape(Shape::plane, Vec3::Zero(), Vec3::UnitZ());
+  bad_node.nodes = {8};
+  EXPECT_THROW(add_rigid_obstacle(model, bad_node), std::invalid_argument);
+  RigidObstacle rough = shape(Shape::plane, Vec3::Zero(), Vec3::UnitZ());
+  rough.friction = 0.3;
+  EXPECT_THROW(add_rigid_obstacle(model, rough), std::invalid_argument);
+  RigidObstacle tilted = shape(Shape::plane, Vec3::Zero(), Vec3::UnitZ());
+  tilted.axis = Vec3(0, 0, 5);
+  add_rigid_obstacle(model, tilted);
+  EXPECT_EQ(model.obstacles.back().axis, Vec3::UnitZ());
+}
+
+// Largest free force on the nodes that do not touch any obstacle: an independent look at
+// the equilibrium relax reports.
+double free_residual_off_contact(const Simulator& sim) {
+  const Model& m = sim.model();
+  const State& s = sim.state();
+  double largest = 0.0;
+  for (int i = 0; i < m.node_count(); ++i) {
+    bool touching = false;
+    for (const RigidObstacle& o : m.obstacles)
+      touching |= std::abs(obstacle_distance(o, s.x[i], s.time).distance) <= 1e-12;
+    if (touching) continue;
+    const Vec3 free = (m.inverse_mass[i].array() > 0.0).cast<double>().matrix();
+    largest = std::max(largest, s.f[i].cwiseProduct(free).norm());
+  }
+  return largest;
+}
+
+TEST(Contact, BoxDroppedOnAPlaneNeverCrossesItAndRestsOnIt) {
+  Model model;
+  add_elastic_component(model, "box",
+                        make_box(Vec3(0.02, 0.02, 0.02), {3, 3, 3}, CellType::hexa,
+                                 Vec3(0, 0, 0.011)),  // 1 mm above the floor
+                        testing::material(30.0));
+  add_rigid_obstacle(model, shape(Shape::plane, Vec3::Zero(), Vec3::UnitZ()));
+  model.gravity = Vec3(0, 0, -9.81);
+  model.damping = 2.0;
+  model.settings.tolerance = 1e-11;
+  finalize(model);
+  Simulator sim(model);
+  double lowest = 1.0;
+  for (int k = 0; k < 3000; ++k) {
+    sim.step();
+    for (const Vec3& x : sim.state().x) lowest = std::min(lowest, x.z());
+  }
+  EXPECT_GE(lowest, -1e-15);
+  EXPECT_LT(lowest, 1e-12);  // it did land
+  ASSERT_TRUE(sim.relax(sim.state().time, 200000).converged);
+  for (const Vec3& x : sim.state().x) EXPECT_GE(x.z(), -1e-15);
+  double weight = 0.0;
+  for (double mass : model.mass) weight += mass * 9.81;
+  const double residual = free_residual_off_contact(sim);
+  const Vec3 contact = obstacle_force(sim.model(), sim.state(), 0);
+  std::printf("plane: steps' lowest z %.3g m, contact %.12g N, weight %.12g N, residual %.3g N\n",
+              lowest, contact.z(), weight, residual);
+  EXPECT_NEAR(contact.z(), weight, 1e-6 * weight);
+  EXPECT_NEAR(contact.x(), 0.0, 1e-6 * weight);
+  EXPECT_NEAR(contact.y(), 0.0, 1e-6 * weight);
+}
+
+// 4 x 4 x 2 cm block, 5 mm cells, fixed on its face `fixed`.
+Model soft_block(const char* fixed) {
+  Model model;
+  const int c = add_elastic_component(model, "block",
+                                      make_box(Vec3(0.04, 0.04, 0.02), {8, 8, 4}, CellType::hexa),
+                                      testing::material(20.0));
+  add_fixed_nodes(model, model.components[c].node_sets.at(fixed));
+  return model;
+}
+
+TEST(Contact, MovingSphereNeverHasANodeInside) {
+  Model model = soft_block("bottom");
+  RigidObstacle ball = shape(Shape::sphere, Vec3(0.002, -0.001, 0.019), Vec3::UnitZ(), 0.008);
+  ball.motion = Schedule{{0.0, 0.2}, {Vec3::Zero(), Vec3(0, 0, -0.005)}};  // 4 mm deep
+  add_rigid_obstacle(model, ball);
+  model.damping = 5.0;
+  finalize(model);
+  Simulator sim(model);
+  double deepest = 0.0;
+  int touching = 0;
+  while (sim.state().time < 0.3) {
+    sim.step();
+    for (const Vec3& x : sim.state().x)
+      deepest = std::min(deepest, obstacle_distance(ball, x, sim.state().time).distance);
+  }
+  for (const Vec3& x : sim.state().x)
+    touching += std::abs(obstacle_distance(ball, x, sim.state().time).distance) <= 1e-12;
+  std::printf("sphere: %ld steps, deepest %.3g m, %d nodes touching at the end\n", sim.state().step,
+              deepest, touching);
+  EXPECT_GE(deepest, -1e-15);
+  EXPECT_GE(touching, 3);  // measured 4
+}
+
+TEST(Contact, ProbeForceBalancesTheSupportReactions) {
+  // A 2 x 2 x 1 cm block (4 x 4 x 2 cells): the one above converges too slowly for a test.
+  Model model;
+  const int c = add_elastic_component(model, "block",
+                                      make_box(Vec3(0.02, 0.02, 0.01), {4, 4, 2}, CellType::hexa),
+                                      testing::material(20.0));
+  add_fixed_nodes(model, model.components[c].node_sets.at("top"));
+  // Probe along +z, 4 mm radius, its tip touching the bottom face (z = -5 mm) at t = 0, then
+  // pushed 3 mm up, off the block's axis so the load is not symmetric.
+  RigidObstacle probe =
+      shape(Shape::rounded_cylinder, Vec3(0.002, 0.001, -0.019), Vec3::UnitZ(), 0.004, 0.010);
+  probe.motion = Schedule{{0.0, 1.0}, {Vec3::Zero(), Vec3(0, 0, 0.003)}};
+  add_rigid_obstacle(model, probe);
+  // Every free node within 1e-12 N of balance: summed over the block, well inside 1e-6 of
+  // the contact force.
+  model.settings.tolerance = 1e-12;
+  finalize(model);
+  Simulator sim(model);
+  ASSERT_TRUE(sim.relax(1.0, 200000).converged);
+  const Vec3 contact = obstacle_force(sim.model(), sim.state(), 0);
+  Vec3 support = Vec3::Zero();
+  for (const Vec3& r : sim.support_reactions()) support += r;
+  const double residual = free_residual_off_contact(sim);
+  std::printf("probe: contact (%.9g %.9g %.9g) N, supports (%.9g %.9g %.9g) N, residual %.3g N\n",
+              contact.x(), contact.y(), contact.z(), support.x(), support.y(), support.z(),
+              residual);
+  EXPECT_GT(contact.z(), 0.0);  // the probe pushes the block up
+  EXPECT_LT((contact + support).norm(), 1e-6 * contact.norm());
+  for (const Vec3& x : sim.state().x) EXPECT_GE(obstacle_distance(probe, x, 1.0).distance, -1e-15);
+}
+
+}  // namespace
+}  // namespace phymul
