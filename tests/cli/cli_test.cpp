@@ -76,11 +76,52 @@ TEST(Cli, BadModelsAreReportedAtTheirLocation) {
       if (!line.starts_with("# expect: ")) continue;
       ++expectations;
       EXPECT_NE(r.output.find(line.substr(10)), std::string::npos)
-          << e.path() << " lacks: " << line.substr(10) << "\ngot:\n" << r.output;
+          << e.path() << " lacks: " << line.substr(10) << "\ngot:\n"
+          << r.output;
     }
     EXPECT_GT(expectations, 0) << e.path();
   }
   EXPECT_GE(seen, 4);
+}
+
+}  // namespace
+}  // namespace phymul
+
+namespace phymul {
+namespace {
+
+// A time step ten times the stability limit: the run stops with exit code 3, a report that
+// says why, and only finite frames behind it.
+TEST(Cli, UnstableRunStopsWithAdviceAndAValidSeries) {
+  testing::TempDir dir;
+  const auto scene = dir.path() / "shaky.yaml";
+  std::ofstream(scene) << R"(simulation:
+  dt: 0.05 s
+  duration: 5 s
+  gravity: [0, 0, -9.81]
+objects:
+  - name: jelly
+    mesh: {generator: box, size: [2 cm, 2 cm, 2 cm], cells: [2, 2, 2]}
+    material: {stiffness: 50 N/m, density: 1000 kg/m^3}
+constraints:
+  - {type: fixed, object: jelly, nodes: top}
+output:
+  interval: 0.05 s
+)";
+  const auto out = dir.path() / "out";
+  const auto r = testing::run_command(testing::cli() + " run " + scene.string() + " -o " +
+                                      out.string() + " -q");
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_NE(r.output.find("component 'jelly'"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("set simulation.dt smaller"), std::string::npos) << r.output;
+  const std::string report = testing::read_text(out / "report.json");
+  EXPECT_NE(report.find("\"status\": \"unstable\""), std::string::npos) << report;
+  for (const auto& e : std::filesystem::directory_iterator(out)) {
+    EXPECT_NE(e.path().extension(), ".tmp") << e.path();
+    if (e.path().extension() == ".vtu") {
+      EXPECT_EQ(testing::read_text(e.path()).find("nan"), std::string::npos) << e.path();
+    }
+  }
 }
 
 }  // namespace
