@@ -74,7 +74,8 @@ void Simulator::step_verlet(double h, double load_time) {
   for (int i = 0; i < model_.node_count(); ++i) s.v[i] = (s.x[i] - x_start_[i]) / h;
   compute_forces(model_, s, load_time);
   load_time_ = load_time;
-  accelerations(a);
+  // The velocity projection below is linear: projecting the sum makes the kick tangent too.
+  accelerations(a, /*tangent=*/false);
   for (int i = 0; i < model_.node_count(); ++i) s.v[i] += 0.5 * h * a[i];
   project_volume_velocities(model_, s.x, s.v, scratch_);
 }
@@ -82,12 +83,12 @@ void Simulator::step_verlet(double h, double load_time) {
 // Without their part along the volume gradients (the pressure the projection would undo
 // anyway), accelerations keep the drift on the constraint: the projection then corrects only
 // second-order terms, and relaxation converges instead of stalling on that round trip.
-void Simulator::accelerations(std::vector<Vec3>& a) {
+void Simulator::accelerations(std::vector<Vec3>& a, bool tangent) {
   const double c = model_.damping;
   for (int i = 0; i < model_.node_count(); ++i)
     a[i] = model_.inverse_mass[i].cwiseProduct(state_.f[i]) -
            c * state_.v[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
-  project_volume_velocities(model_, state_.x, a, scratch_);
+  if (tangent) project_volume_velocities(model_, state_.x, a, scratch_);
 }
 
 // The paper's Newton-Cotes family: an Euler predictor, then the trapezoid rule on the
