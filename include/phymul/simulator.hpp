@@ -30,6 +30,15 @@ struct StaticResult {
   double residual = 0.0;  // N, largest free residual force at the end
 };
 
+// Where a static solve stands between two relaxation iterations: with State and the load
+// time, all that its next iteration reads (a checkpoint resumes from it).
+struct StaticProgress {
+  int load_step = 0;              // the load step under way, 1-based; 0 before the first
+  long iterations = 0;            // in the load steps before it
+  long step_iterations = 0;       // in the load step under way
+  double previous_kinetic = 0.0;  // J, the kinetic damping's last peak candidate
+};
+
 class Simulator {
  public:
   explicit Simulator(Model model);
@@ -48,6 +57,13 @@ class Simulator {
                      const std::function<void(long, double)>& progress = {});
   // The scene's static mode: load steps up to the scene's duration.
   StaticResult solve_static(const std::function<void(long, double)>& progress = {});
+  // Continues a static solve from static_progress() (set by restore), as if never stopped.
+  StaticResult resume_static(const std::function<void(long, double)>& progress = {});
+
+  // Checkpoints: what the next step reads besides State, and putting it all back.
+  double load_time() const { return load_time_; }
+  const StaticProgress& static_progress() const { return static_progress_; }
+  void restore(State state, double load_time, const StaticProgress& progress);
 
   double kinetic_energy() const;  // J
   // Largest nodal force (N) on the free axes, less the part a volume constraint balances.
@@ -64,6 +80,9 @@ class Simulator {
   void step_verlet(double dt, double load_time);
   void step_newton_cotes(double dt, double load_time);
   void check_stability() const;
+  StaticResult continue_relax(double load_time, long max_iterations,
+                              const std::function<void(long, double)>& progress);
+  StaticResult static_load_steps(const std::function<void(long, double)>& progress);
   void accelerations(std::vector<Vec3>& a, bool tangent = true);
   void remove_contact_forces(std::vector<Vec3>& r) const;
 
@@ -71,6 +90,7 @@ class Simulator {
   State state_;
   double dt_ = 0.0;
   double load_time_ = 0.0;  // time at which State::f was evaluated
+  StaticProgress static_progress_;
   // Sized once: no allocation in a step.
   std::vector<Vec3> x_start_, v_start_, f_start_, a1_, scratch_;
   double size_scale_ = 1.0;  // m, diagonal of the rest bounding box

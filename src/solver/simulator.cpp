@@ -222,54 +222,90 @@ std::vector<double> Simulator::component_volumes() const {
 
 StaticResult Simulator::relax(double load_time, long max_iterations,
                               const std::function<void(long, double)>& progress) {
-  StaticResult result;
+  static_progress_.step_iterations = 0;
+  static_progress_.previous_kinetic = 0.0;
   apply_position_constraints(model_, state_.x, load_time, scratch_);
   compute_forces(model_, state_, load_time);
   load_time_ = load_time;
-  double previous_kinetic = 0.0;
+  return continue_relax(load_time, max_iterations, progress);
+}
+
+StaticResult Simulator::continue_relax(double load_time, long max_iterations,
+                                       const std::function<void(long, double)>& progress) {
+  StaticProgress& p = static_progress_;
+  StaticResult result;
   for (;;) {
     result.residual = max_residual_force();
     if (result.residual < model_.settings.tolerance) {
       result.converged = true;
       break;
     }
-    if (result.iterations >= max_iterations) break;
+    if (p.step_iterations >= max_iterations) break;
     if (model_.settings.integrator == Integrator::verlet)
       step_verlet(dt_, load_time);
     else
       step_newton_cotes(dt_, load_time);
-    ++result.iterations;
+    ++p.step_iterations;
     ++state_.step;
     check_stability();
     if (model_.settings.kinetic_damping) {
       // Dynamic relaxation: at a kinetic-energy peak the system is nearest its minimum
       // along the current motion, so restart from rest there.
       const double kinetic = kinetic_energy();
-      if (kinetic < previous_kinetic) {
+      if (kinetic < p.previous_kinetic) {
         for (Vec3& v : state_.v) v.setZero();
-        previous_kinetic = 0.0;
+        p.previous_kinetic = 0.0;
       } else {
-        previous_kinetic = kinetic;
+        p.previous_kinetic = kinetic;
       }
     }
-    if (progress && result.iterations % 256 == 0) progress(result.iterations, result.residual);
+    if (progress && p.step_iterations % 256 == 0) progress(p.step_iterations, result.residual);
   }
+  result.iterations = p.step_iterations;
   state_.time = load_time;
   return result;
 }
 
 StaticResult Simulator::solve_static(const std::function<void(long, double)>& progress) {
+  static_progress_ = StaticProgress{};
+  return static_load_steps(progress);
+}
+
+StaticResult Simulator::resume_static(const std::function<void(long, double)>& progress) {
+  return static_load_steps(progress);
+}
+
+// The load steps from static_progress_ on: the one under way continues where it stopped.
+StaticResult Simulator::static_load_steps(const std::function<void(long, double)>& progress) {
   const SimulationSpec& s = model_.settings;
+  StaticProgress& p = static_progress_;
   StaticResult total;
-  for (int k = 1; k <= s.load_steps; ++k) {
-    const double load_time = s.duration * double(k) / double(s.load_steps);
-    const StaticResult r = relax(load_time, s.max_iterations - total.iterations, progress);
-    total.iterations += r.iterations;
+  const bool resuming = p.load_step > 0;
+  if (!resuming) p.load_step = 1;
+  for (bool first = true; p.load_step <= s.load_steps; ++p.load_step, first = false) {
+    const double load_time = s.duration * double(p.load_step) / double(s.load_steps);
+    const long budget = s.max_iterations - p.iterations;
+    const StaticResult r = resuming && first ? continue_relax(load_time, budget, progress)
+                                             : relax(load_time, budget, progress);
+    p.iterations += r.iterations;
+    p.step_iterations = 0;
+    total.iterations = p.iterations;
     total.residual = r.residual;
     total.converged = r.converged;
     if (!r.converged) break;
   }
   return total;
+}
+
+void Simulator::restore(State state, double load_time, const StaticProgress& progress) {
+  if (state.x.size() != state_.x.size() || state.v.size() != state_.v.size() ||
+      state.f.size() != state_.f.size() || state.rotation.size() != state_.rotation.size())
+    throw std::invalid_argument(fmt::format(
+        "restore: the state has {} nodes and {} rotations, the model {} and {}", state.x.size(),
+        state.rotation.size(), state_.x.size(), state_.rotation.size()));
+  state_ = std::move(state);
+  load_time_ = load_time;
+  static_progress_ = progress;
 }
 
 }  // namespace phymul
