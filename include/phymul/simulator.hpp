@@ -49,7 +49,8 @@ class Simulator {
   double dt() const { return dt_; }
   void set_dt(double dt) { dt_ = dt; }  // s
 
-  // One explicit step of dt with the scene's integrator; loads at the new time.
+  // One explicit step of dt with the scene's integrator; loads at the new time. An unstable
+  // step throws InstabilityError and leaves the state as it was before it.
   void step();
   // Relax to equilibrium with the loads of load_time (s); stops when the largest free
   // residual force is below the scene's tolerance or after max_iterations.
@@ -80,6 +81,8 @@ class Simulator {
   void step_verlet(double dt, double load_time);
   void step_newton_cotes(double dt, double load_time);
   void check_stability() const;
+  // check_stability; when it fails, the state goes back to before the step, then it throws.
+  void checked_step(double time, double previous_load);
   StaticResult continue_relax(double load_time, long max_iterations,
                               const std::function<void(long, double)>& progress);
   StaticResult static_load_steps(const std::function<void(long, double)>& progress);
@@ -93,7 +96,8 @@ class Simulator {
   StaticProgress static_progress_;
   // Sized once: no allocation in a step.
   std::vector<Vec3> x_start_, v_start_, f_start_, a1_, scratch_;
-  double size_scale_ = 1.0;  // m, diagonal of the rest bounding box
+  double size_scale_ = 1.0;            // m, diagonal of the rest bounding box
+  std::vector<double> shortest_edge_;  // m per node, for the runaway guard (runaway_guard.hpp)
 };
 
 }  // namespace phymul

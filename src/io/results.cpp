@@ -69,6 +69,7 @@ void ResultWriter::monitor(Simulator& sim) {
                                 sim.state().shape_memory_energy, sim.max_residual_force());
   for (int c : closed_components_) row += fmt::format(",{}", volumes[c]);
   write_monitors(row + '\n');
+  monitored_time_ = sim.state().time;
 }
 
 void ResultWriter::write_monitors(const std::string& text) {

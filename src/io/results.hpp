@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,7 @@ class ResultWriter {
   // in the directory; monitors.csv starts over from the recorded text).
   const std::vector<PvdEntry>& frame_list() const { return pvd_; }
   const std::string& monitors_text() const { return monitors_text_; }
+  double monitored_time() const { return monitored_time_; }  // s, of the last row; NaN: none
   void restore(std::vector<PvdEntry> frames, const std::string& monitors_text);
 
  private:
@@ -33,6 +35,7 @@ class ResultWriter {
   std::vector<PvdEntry> pvd_;
   std::ofstream monitors_;
   std::string monitors_text_;  // what monitors_ was given
+  double monitored_time_ = std::numeric_limits<double>::quiet_NaN();
   void write_monitors(const std::string& text);
   std::vector<double> displacement_, velocity_, force_;  // flat xyz buffers for the writer
 };

@@ -305,6 +305,11 @@ RunReport run_scene(const Scene& scene, const RunOptions& options) {
     report.status = "unstable";
     report.message = e.what();
     report.steps = sim.state().step;
+    report.residual = sim.max_residual_force();
+    // The step that failed was undone: write the last good state, unless it is written.
+    const double t = sim.state().time;
+    if (out.monitored_time() != t) out.monitor(sim);
+    if (out.frame_list().empty() || out.frame_list().back().time != t) out.frame(sim);
   }
   report.wall_time =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -7,6 +7,7 @@
 #include "constraints/constraints.hpp"
 #include "constraints/contact.hpp"
 #include "forces/forces.hpp"
+#include "solver/runaway_guard.hpp"
 
 namespace phymul {
 namespace {
@@ -42,6 +43,7 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
   scratch_.assign(n, Vec3::Zero());
   a1_.assign(n, Vec3::Zero());
   size_scale_ = bounding_diagonal(model_.rest_position);
+  shortest_edge_ = runaway_edges(model_);
   const double stable = stable_time_step(model_);
   dt_ = model_.settings.dt ? *model_.settings.dt : model_.settings.dt_safety * stable;
   if (!std::isfinite(dt_)) dt_ = 1e-3;  // no stiffness at all: any step is stable
@@ -50,14 +52,32 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
 }
 
 void Simulator::step() {
-  const double load_time = state_.time + dt_;
+  const double time = state_.time, previous_load = load_time_, load_time = state_.time + dt_;
   if (model_.settings.integrator == Integrator::verlet)
     step_verlet(dt_, load_time);
   else
     step_newton_cotes(dt_, load_time);
   state_.time = load_time;
   ++state_.step;
-  check_stability();
+  checked_step(time, previous_load);
+}
+
+void Simulator::checked_step(double time, double previous_load) {
+  try {
+    check_stability();
+  } catch (const InstabilityError&) {
+    // Back to the last good state (both schemes keep x and v from before the step), so
+    // that the run can write it.
+    for (int i = 0; i < model_.node_count(); ++i)
+      state_.x[i] = x_start_[i], state_.v[i] = v_start_[i];
+    for (Eigen::Quaterniond& q : state_.rotation)
+      if (!q.coeffs().allFinite()) q = Eigen::Quaterniond::Identity();
+    state_.time = time;
+    --state_.step;
+    compute_forces(model_, state_, previous_load);
+    load_time_ = previous_load;
+    throw;
+  }
 }
 
 // Velocity Verlet; the constraint projection enters the half-step velocity as the
@@ -68,6 +88,7 @@ void Simulator::step_verlet(double h, double load_time) {
   accelerations(a);
   for (int i = 0; i < model_.node_count(); ++i) {
     x_start_[i] = s.x[i];
+    v_start_[i] = s.v[i];  // the last good state, if the step fails its checks
     s.x[i] += h * (s.v[i] + 0.5 * h * a[i]);
   }
   apply_position_constraints(model_, s.x, load_time, scratch_);
@@ -121,16 +142,9 @@ void Simulator::step_newton_cotes(double h, double load_time) {
 
 void Simulator::check_stability() const {
   const State& s = state_;
-  for (int i = 0; i < model_.node_count(); ++i) {
-    const double moved = (s.x[i] - model_.rest_position[i]).norm();
-    const bool finite = std::isfinite(moved) && s.v[i].allFinite();
-    if (finite && moved <= 10.0 * size_scale_) continue;
+  auto unstable = [&](int i, const std::string& what) {
     const int c = component_of(model_, i);
-    const std::string what =
-        finite ? fmt::format("moved {:.3g} m, more than 10 times the model's size ({:.3g} m)",
-                             moved, size_scale_)
-               : std::string("has a non-finite position or velocity");
-    throw InstabilityError(
+    return InstabilityError(
         fmt::format("the simulation became unstable at t = {:.6g} s (step {}): node {} of "
                     "component '{}' {}. The time step is {:.3g} s and the stability estimate "
                     "is {:.3g} s: set simulation.dt smaller (or 'auto' with dt_safety below "
@@ -138,7 +152,22 @@ void Simulator::check_stability() const {
                     s.time, s.step, i, c >= 0 ? model_.components[c].name : "?", what, dt_,
                     stable_time_step(model_)),
         i, s.time);
+  };
+  for (int i = 0; i < model_.node_count(); ++i) {
+    const double moved = (s.x[i] - model_.rest_position[i]).norm();
+    const bool finite = std::isfinite(moved) && s.v[i].allFinite();
+    if (finite && moved <= 10.0 * size_scale_) continue;
+    throw unstable(
+        i, finite ? fmt::format("moved {:.3g} m, more than 10 times the model's size ({:.3g} m)",
+                                moved, size_scale_)
+                  : std::string("has a non-finite position or velocity"));
   }
+  if (const auto r = find_runaway(model_, shortest_edge_, x_start_, s.x))
+    throw unstable(r->node,
+                   fmt::format("moved {:.3g} m against its neighbours in one step, more than "
+                               "{:g} of its shortest rest edge ({:.3g} m): a runaway, caught "
+                               "before any number overflowed",
+                               r->moved, kRunawayFraction, r->edge));
 }
 
 double Simulator::kinetic_energy() const {
@@ -247,7 +276,7 @@ StaticResult Simulator::continue_relax(double load_time, long max_iterations,
       step_newton_cotes(dt_, load_time);
     ++p.step_iterations;
     ++state_.step;
-    check_stability();
+    checked_step(state_.time, load_time);
     if (model_.settings.kinetic_damping) {
       // Dynamic relaxation: at a kinetic-energy peak the system is nearest its minimum
       // along the current motion, so restart from rest there.
