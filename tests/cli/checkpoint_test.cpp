@@ -243,6 +243,26 @@ TEST(Checkpoint, ResumeRefusesAChangedScene) {
   EXPECT_NE(r.output.find(scene.string()), std::string::npos) << r.output;
 }
 
+TEST(Checkpoint, ResumeRefusesAChangedMeshFile) {
+  TempDir dir;
+  const fs::path examples = testing::source_dir() / "examples";
+  fs::create_directories(dir.path() / "meshes");
+  fs::copy_file(examples / "meshes/block.msh", dir.path() / "meshes/block.msh");
+  const fs::path scene = dir.path() / "block.yaml";
+  fs::copy_file(examples / "pressed_block.yaml", scene);
+  const fs::path part = dir.path() / "part";
+  ASSERT_EQ(phymul(scene.string() + " -o " + part.string() + " --stop-after 256").exit_code, 130);
+  // The same file with one coordinate moved by 1 um (1e-3 in its millimetres).
+  std::string mesh = read_text(dir.path() / "meshes/block.msh");
+  const auto at = mesh.find("-20.0 -20.0 0.0\n");
+  ASSERT_NE(at, std::string::npos);
+  mesh.replace(at, 15, "-20.001 -20.0 0.0");
+  std::ofstream(dir.path() / "meshes/block.msh") << mesh;
+  const auto r = phymul("--resume " + part.string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("differs from the checkpoint's"), std::string::npos) << r.output;
+}
+
 TEST(Checkpoint, ResumeWithoutACheckpointSaysWhy) {
   TempDir dir;
   const fs::path scene = write_scene(dir, dynamic_scene("verlet"));
