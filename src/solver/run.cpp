@@ -88,8 +88,9 @@ struct Run {
   RunReport& report;
   ProgressLine& progress;
   std::uint64_t scene_hash, model_hash;
+  bool checkpoint_failed = false;
 
-  void save_checkpoint(long steps_done, double next_frame) const {
+  void save_checkpoint(long steps_done, double next_frame) {
     Checkpoint c;
     c.scene_file = std::filesystem::absolute(scene.file).lexically_normal().string();
     c.scene_hash = scene_hash;
@@ -103,7 +104,14 @@ struct Run {
     c.next_frame = next_frame;
     c.frames = out.frame_list();
     c.monitors = out.monitors_text();
-    write_checkpoint(checkpoint_path(options.output_dir), c);
+    // A checkpoint that cannot be written (disk full) must not cost the run its results.
+    try {
+      write_checkpoint(checkpoint_path(options.output_dir), c);
+    } catch (const std::exception& e) {
+      if (!checkpoint_failed)
+        std::fprintf(stderr, "warning: %s; the run goes on without a checkpoint\n", e.what());
+      checkpoint_failed = true;
+    }
   }
   bool stop_requested(long steps) const {
     return interrupt_requested() ||

@@ -265,6 +265,24 @@ TEST(Checkpoint, ResumeRefusesAChangedMeshFile) {
   EXPECT_NE(r.output.find("differs from the checkpoint's"), std::string::npos) << r.output;
 }
 
+// A checkpoint that cannot be written (here its name is taken by a directory) costs a
+// warning, not the run's results.
+TEST(Checkpoint, AnUnwritableCheckpointWarnsAndTheRunGoesOn) {
+  TempDir dir;
+  const fs::path scene = write_scene(dir, dynamic_scene("verlet"));
+  const fs::path out = dir.path() / "out";
+  fs::create_directories(out / "checkpoint.bin" / "taken");
+  const auto r = phymul(scene.string() + " -o " + out.string() + " --checkpoint-every '20 steps'");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("the run goes on without a checkpoint"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("without a checkpoint", r.output.find("without a checkpoint") + 1),
+            std::string::npos)
+      << "warned more than once:\n"
+      << r.output;
+  EXPECT_NE(read_text(out / "report.json").find("\"completed\""), std::string::npos);
+  EXPECT_GE(count_frames(out), 9);
+}
+
 TEST(Checkpoint, ResumeWithoutACheckpointSaysWhy) {
   TempDir dir;
   const fs::path scene = write_scene(dir, dynamic_scene("verlet"));
