@@ -51,7 +51,8 @@ struct RunReport {
 // Throws SceneError for input problems; instability ends the run with status "unstable",
 // the last good frame written and the report saying what happened. An interruption request
 // (below) ends it after the current step (dynamic) or at the next progress check of the
-// static relaxation (every 256 iterations), with a final frame and status "interrupted".
+// static relaxation (every 256 iterations and at the end of each load step), with a final
+// frame and status "interrupted".
 // An interrupted run (and one with a checkpoint interval) leaves output_dir/checkpoint.bin;
 // a run that ends otherwise removes it. Checkpoint problems (missing, corrupt, another
 // scene) throw CheckpointError.

@@ -322,6 +322,9 @@ StaticResult Simulator::static_load_steps(const std::function<void(long, double)
     total.residual = r.residual;
     total.converged = r.converged;
     if (!r.converged) break;
+    // Between load steps too: a run can stop (and checkpoint) there even when no load step
+    // needs 256 iterations.
+    if (progress && p.load_step < s.load_steps) progress(r.iterations, r.residual);
   }
   return total;
 }

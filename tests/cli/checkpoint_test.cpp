@@ -160,6 +160,34 @@ TEST(Checkpoint, StaticRunStoppedInALoadStepAndResumedMatchesByteForByte) {
   expect_same_results(full, part);
 }
 
+// The pressed block example (a Gmsh mesh file) converges each load step in fewer than 256
+// iterations: it stops, and checkpoints, between load steps.
+TEST(Checkpoint, StaticRunStoppedBetweenLoadStepsAndResumedMatchesByteForByte) {
+  TempDir dir;
+  const fs::path examples = testing::source_dir() / "examples";
+  fs::create_directories(dir.path() / "meshes");
+  fs::copy_file(examples / "meshes/block.msh", dir.path() / "meshes/block.msh");
+  const fs::path scene = dir.path() / "block.yaml";
+  fs::copy_file(examples / "pressed_block.yaml", scene);
+  const fs::path full = dir.path() / "full", part = dir.path() / "part";
+  const auto r0 = phymul(scene.string() + " -o " + full.string());
+  ASSERT_EQ(r0.exit_code, 0) << r0.output;
+  long after = 1;  // iterations, all load steps together
+  for (int stop = 0; stop < 2; ++stop) {
+    const auto r = phymul((stop == 0 ? scene.string() + " -o " : "--resume ") + part.string() +
+                          " --stop-after " + std::to_string(after));
+    ASSERT_EQ(r.exit_code, 130) << r.output;
+    const Checkpoint c = read_checkpoint(part / "checkpoint.bin");
+    EXPECT_EQ(c.static_progress.load_step, stop + 1);
+    EXPECT_EQ(c.static_progress.step_iterations, 0);
+    EXPECT_GT(c.static_progress.iterations, after - 1);
+    after = c.static_progress.iterations + 1;
+  }
+  const auto r1 = phymul("--resume " + part.string());
+  ASSERT_EQ(r1.exit_code, 0) << r1.output;
+  expect_same_results(full, part);
+}
+
 TEST(Checkpoint, SigintWritesACheckpointThatResumesToTheSameResults) {
   TempDir dir;
   // Long enough for the signal to arrive part way.
