@@ -42,8 +42,9 @@ format:
 clean:
 	@rm -rf $(BUILD) $(BUILD).configure.log $(BUILD)-asan $(BUILD)-asan.configure.log
 
-# Fuzzing (libFuzzer + ASan + UBSan, clang): the scene reader and the Truth Cube CSV reader,
-# each run for FUZZ_SECONDS from a seed corpus; findings are written as build-fuzz/crash-*.
+# Fuzzing (libFuzzer + ASan + UBSan, clang): the scene reader, the Truth Cube CSV reader, the
+# VTK and Gmsh mesh readers and the checkpoint reader, each run for FUZZ_SECONDS from a seed
+# corpus; findings are written as build-fuzz/crash-*.
 FUZZ_DIR ?= build-fuzz
 FUZZ_SECONDS ?= 60
 FUZZ_CXX ?= clang++-14
@@ -51,7 +52,8 @@ FUZZ_FLAGS := -std=c++20 -O1 -g -fno-omit-frame-pointer -Iinclude -Isrc -I/usr/i
 FUZZ_SANITIZE := -fsanitize=address,undefined
 FUZZ_LIBS := -lyaml-cpp -lfmt
 FUZZ_LIB_SRCS := $(wildcard src/io/scene.cpp src/io/scene_reader.cpp src/io/units.cpp \
-	src/io/parameter_table.cpp src/mesh/*.cpp src/validation/truthcube.cpp)
+	src/io/parameter_table.cpp src/mesh/*.cpp src/validation/truthcube.cpp src/io/mesh_file*.cpp \
+	src/io/checkpoint.cpp src/io/vtk.cpp)
 FUZZ_LIB_OBJS := $(patsubst src/%.cpp,$(FUZZ_DIR)/obj/%.o,$(FUZZ_LIB_SRCS))
 
 .PHONY: fuzz fuzz-build
@@ -66,15 +68,22 @@ $(FUZZ_DIR)/%: fuzz/%.cpp $(FUZZ_LIB_OBJS)
 	$(FUZZ_CXX) $(FUZZ_FLAGS) $(FUZZ_SANITIZE) -fsanitize=fuzzer $< $(FUZZ_LIB_OBJS) \
 		$(FUZZ_LIBS) -o $@
 
-fuzz-build: $(FUZZ_DIR)/scene_fuzz $(FUZZ_DIR)/truthcube_fuzz
+FUZZ_TARGETS := scene truthcube mesh_vtk mesh_gmsh checkpoint
+FUZZ_RUN = ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+	./$(1)_fuzz -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 \
+	-print_final_stats=1 corpus/$(1)
+
+fuzz-build: $(patsubst %,$(FUZZ_DIR)/%_fuzz,$(FUZZ_TARGETS))
 
 fuzz: fuzz-build
-	@mkdir -p $(FUZZ_DIR)/corpus/scene $(FUZZ_DIR)/corpus/truthcube
+	@for t in $(FUZZ_TARGETS); do mkdir -p $(FUZZ_DIR)/corpus/$$t; done
 	@cp examples/*.yaml tests/data/bad_scenes/*.yaml $(FUZZ_DIR)/corpus/scene/
 	@cp data/truthcube/uniaxial_positions.csv $(FUZZ_DIR)/corpus/truthcube/
-	cd $(FUZZ_DIR) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-		./scene_fuzz -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 \
-		-print_final_stats=1 corpus/scene
-	cd $(FUZZ_DIR) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-		./truthcube_fuzz -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 \
-		-print_final_stats=1 corpus/truthcube
+	@cp examples/meshes/*.vtk tests/data/bad_meshes/*.vtk $(FUZZ_DIR)/corpus/mesh_vtk/
+	@cp examples/meshes/*.msh tests/data/bad_meshes/*.msh $(FUZZ_DIR)/corpus/mesh_gmsh/
+	@cp tests/data/checkpoints/* $(FUZZ_DIR)/corpus/checkpoint/
+	cd $(FUZZ_DIR) && $(call FUZZ_RUN,scene)
+	cd $(FUZZ_DIR) && $(call FUZZ_RUN,truthcube)
+	cd $(FUZZ_DIR) && $(call FUZZ_RUN,mesh_vtk)
+	cd $(FUZZ_DIR) && $(call FUZZ_RUN,mesh_gmsh)
+	cd $(FUZZ_DIR) && $(call FUZZ_RUN,checkpoint)

@@ -43,10 +43,29 @@ int check(const std::string& file) {
   }
 }
 
-int run(const std::string& file, const std::string& out, bool quiet) {
+struct RunArguments {
+  std::string scene, out = "out", checkpoint_every, resume;
+  bool quiet = false;
+  long stop_after = 0;  // hidden, for tests
+};
+
+int run(RunArguments a) {
   try {
+    phymul::RunOptions options;
+    options.progress = !a.quiet && isatty(fileno(stderr));
+    options.stop_after_steps = a.stop_after;
+    if (!a.checkpoint_every.empty())
+      options.checkpoint_every = phymul::parse_checkpoint_interval(a.checkpoint_every);
+    if (!a.resume.empty()) {
+      options.resume = true;
+      a.out = a.resume;
+      if (a.scene.empty()) a.scene = phymul::checkpointed_scene(a.resume).string();
+    }
+    options.output_dir = a.out;
+    const std::string& file = a.scene;
+    const std::string& out = a.out;
+    const bool quiet = a.quiet;
     const phymul::Scene scene = phymul::load_scene(file);
-    phymul::RunOptions options{out, !quiet && isatty(fileno(stderr))};
     phymul::install_interrupt_handlers();
     const phymul::RunReport r = phymul::run_scene(scene, options);
     if (!quiet)
@@ -64,8 +83,9 @@ int run(const std::string& file, const std::string& out, bool quiet) {
       return kNotConverged;
     }
     if (r.status == "interrupted") {
-      std::cerr << fmt::format("{}: {} after {} steps ({:.4g} s simulated); {} frames in {}\n",
-                               file, r.message, r.steps, r.simulated_time, r.frames, out);
+      std::cerr << fmt::format(
+          "{}: stopped after {} steps ({:.4g} s simulated); {} frames in {}\n{}\n", file, r.steps,
+          r.simulated_time, r.frames, out, r.message);
       return kInterrupted;
     }
     return 0;
@@ -79,13 +99,24 @@ int run(const std::string& file, const std::string& out, bool quiet) {
 int main(int argc, char** argv) {
   CLI::App app{"phymul: soft organs and their surroundings (Phymul local shape memory model)"};
   app.require_subcommand(1);
-  std::string scene_file, out_dir = "out";
-  bool quiet = false;
+  std::string scene_file;
+  RunArguments run_args;
 
   auto* run_cmd = app.add_subcommand("run", "simulate a scene and write its results");
-  run_cmd->add_option("scene", scene_file, "scene file (YAML)")->required();
-  run_cmd->add_option("-o,--output", out_dir, "output directory")->capture_default_str();
-  run_cmd->add_flag("-q,--quiet", quiet, "no progress and no summary");
+  run_cmd->add_option("scene", run_args.scene,
+                      "scene file (YAML); with --resume, the one the checkpoint records");
+  auto* output =
+      run_cmd->add_option("-o,--output", run_args.out, "output directory")->capture_default_str();
+  run_cmd->add_flag("-q,--quiet", run_args.quiet, "no progress and no summary");
+  run_cmd->add_option("--checkpoint-every", run_args.checkpoint_every,
+                      "write DIR/checkpoint.bin every N steps ('500 steps') or simulated "
+                      "time ('0.2 s'); an interrupted run writes one anyway");
+  run_cmd
+      ->add_option("--resume", run_args.resume,
+                   "continue the interrupted run in DIR from its checkpoint (same results, bit "
+                   "for bit, as never interrupted)")
+      ->excludes(output);
+  run_cmd->add_option("--stop-after", run_args.stop_after)->group("");  // tests: as if interrupted
 
   auto* check_cmd = app.add_subcommand("check", "validate a scene without running it");
   check_cmd->add_option("scene", scene_file, "scene file (YAML)")->required();
@@ -110,7 +141,14 @@ int main(int argc, char** argv) {
   }
   CLI11_PARSE(app, argc, argv);
   try {
-    if (*run_cmd) return run(scene_file, out_dir, quiet);
+    if (*run_cmd) {
+      if (run_args.scene.empty() && run_args.resume.empty()) {
+        std::cerr << "error: run: scene is required (a scene file, or --resume DIR to continue a "
+                     "run); run with --help\n";
+        return kInputError;
+      }
+      return run(run_args);
+    }
     if (*check_cmd) return check(scene_file);
     if (*truthcube.app) return truthcube.run();
     if (*calibrate.app) return calibrate.run();

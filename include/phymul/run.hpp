@@ -8,9 +8,27 @@
 
 namespace phymul {
 
+// How often a run writes its checkpoint (output_dir/checkpoint.bin); both zero: only when
+// interrupted.
+struct CheckpointInterval {
+  long steps = 0;     // explicit steps (dynamic) or relaxation iterations (static)
+  double time = 0.0;  // s of simulated time (dynamic mode only)
+};
+
+// "500 steps" or a simulated time with its unit ("0.2 s", "50 ms"). Throws
+// std::invalid_argument with a message naming the text and what is expected.
+CheckpointInterval parse_checkpoint_interval(const std::string& text);
+
 struct RunOptions {
   std::filesystem::path output_dir;
   bool progress = false;  // a progress line on stderr (the CLI turns it on for terminals)
+  CheckpointInterval checkpoint_every;
+  // Continue from output_dir's checkpoint; the scene must be the one it was run from
+  // (same bytes), and the results then match the uninterrupted run's bit for bit.
+  bool resume = false;
+  // For tests: behave as if interrupted after this many steps (dynamic) or at the first
+  // progress check at or after this many relaxation iterations (static); 0: never.
+  long stop_after_steps = 0;
 };
 
 struct RunReport {
@@ -33,8 +51,15 @@ struct RunReport {
 // Throws SceneError for input problems; instability ends the run with status "unstable",
 // the last good frame written and the report saying what happened. An interruption request
 // (below) ends it after the current step (dynamic) or at the next progress check of the
-// static relaxation (every 256 iterations), with a final frame and status "interrupted".
+// static relaxation (every 256 iterations and at the end of each load step), with a final
+// frame and status "interrupted".
+// An interrupted run (and one with a checkpoint interval) leaves output_dir/checkpoint.bin;
+// a run that ends otherwise removes it. Checkpoint problems (missing, corrupt, another
+// scene) throw CheckpointError.
 RunReport run_scene(const Scene& scene, const RunOptions& options);
+
+// The scene file that the checkpoint in output_dir was run from (absolute path).
+std::filesystem::path checkpointed_scene(const std::filesystem::path& output_dir);
 
 // Interruption: SIGINT and SIGTERM handlers that set an async-signal-safe flag which
 // run_scene checks; a second signal of the same kind takes its default action (ends the

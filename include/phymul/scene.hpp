@@ -68,6 +68,8 @@ struct MeshSpec {
   double radius = 0.01, length = 0.02;                      // cylinder, m
   int around = 16, along = 4, rings = 2;                    // cylinder
   Eigen::Vector3d center = Eigen::Vector3d::Zero();         // m
+  std::string file;                                         // instead of a generator
+  std::string units = "m";                                  // of the file's coordinates
   SourceLoc loc;
 };
 

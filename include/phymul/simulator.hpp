@@ -30,6 +30,15 @@ struct StaticResult {
   double residual = 0.0;  // N, largest free residual force at the end
 };
 
+// Where a static solve stands between two relaxation iterations: with State and the load
+// time, all that its next iteration reads (a checkpoint resumes from it).
+struct StaticProgress {
+  int load_step = 0;              // the load step under way, 1-based; 0 before the first
+  long iterations = 0;            // in the load steps before it
+  long step_iterations = 0;       // in the load step under way
+  double previous_kinetic = 0.0;  // J, the kinetic damping's last peak candidate
+};
+
 class Simulator {
  public:
   explicit Simulator(Model model);
@@ -40,7 +49,8 @@ class Simulator {
   double dt() const { return dt_; }
   void set_dt(double dt) { dt_ = dt; }  // s
 
-  // One explicit step of dt with the scene's integrator; loads at the new time.
+  // One explicit step of dt with the scene's integrator; loads at the new time. An unstable
+  // step throws InstabilityError and leaves the state as it was before it.
   void step();
   // Relax to equilibrium with the loads of load_time (s); stops when the largest free
   // residual force is below the scene's tolerance or after max_iterations.
@@ -48,6 +58,13 @@ class Simulator {
                      const std::function<void(long, double)>& progress = {});
   // The scene's static mode: load steps up to the scene's duration.
   StaticResult solve_static(const std::function<void(long, double)>& progress = {});
+  // Continues a static solve from static_progress() (set by restore), as if never stopped.
+  StaticResult resume_static(const std::function<void(long, double)>& progress = {});
+
+  // Checkpoints: what the next step reads besides State, and putting it all back.
+  double load_time() const { return load_time_; }
+  const StaticProgress& static_progress() const { return static_progress_; }
+  void restore(State state, double load_time, const StaticProgress& progress);
 
   double kinetic_energy() const;  // J
   // Largest nodal force (N) on the free axes, less the part a volume constraint balances.
@@ -64,6 +81,11 @@ class Simulator {
   void step_verlet(double dt, double load_time);
   void step_newton_cotes(double dt, double load_time);
   void check_stability() const;
+  // check_stability; when it fails, the state goes back to before the step, then it throws.
+  void checked_step(double time, double previous_load);
+  StaticResult continue_relax(double load_time, long max_iterations,
+                              const std::function<void(long, double)>& progress);
+  StaticResult static_load_steps(const std::function<void(long, double)>& progress);
   void accelerations(std::vector<Vec3>& a, bool tangent = true);
   void remove_contact_forces(std::vector<Vec3>& r) const;
 
@@ -71,9 +93,11 @@ class Simulator {
   State state_;
   double dt_ = 0.0;
   double load_time_ = 0.0;  // time at which State::f was evaluated
+  StaticProgress static_progress_;
   // Sized once: no allocation in a step.
   std::vector<Vec3> x_start_, v_start_, f_start_, a1_, scratch_;
-  double size_scale_ = 1.0;  // m, diagonal of the rest bounding box
+  double size_scale_ = 1.0;            // m, diagonal of the rest bounding box
+  std::vector<double> shortest_edge_;  // m per node, for the runaway guard (runaway_guard.hpp)
 };
 
 }  // namespace phymul

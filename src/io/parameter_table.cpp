@@ -26,7 +26,8 @@ const std::vector<Section>& sections() {
       {"scene", "(top level)", "The keys at the top of a scene file. Only `objects` is required."},
       {"simulation", "simulation", "Time stepping and solver settings."},
       {"object", "objects[]", "Each entry of `objects`: one deformable body."},
-      {"mesh", "objects[].mesh", "The generated mesh of an object."},
+      {"mesh", "objects[].mesh",
+       "The mesh of an object: generated (`generator`) or read from a file (`file`)."},
       {"material", "objects[].material",
        "Shape-memory material of an object. Give its `density` or its total `mass`."},
       {"load", "loads[]", "Each entry of `loads`: a nodal force, the same on every selected node."},
@@ -170,7 +171,7 @@ std::vector<Parameter> object_parameters() {
        .kind = Kind::map,
        .required = true,
        .child = "mesh",
-       .doc = "The generated mesh."},
+       .doc = "The mesh, generated or read from a file."},
       {.section = "object",
        .name = "material",
        .kind = Kind::map,
@@ -191,8 +192,22 @@ std::vector<Parameter> mesh_parameters() {
        .name = "generator",
        .kind = Kind::choice,
        .choices = {"box", "ellipsoid", "cylinder"},
-       .required = true,
+       .one_of = "source",
        .doc = "Which mesh generator builds the object."},
+      {.section = "mesh",
+       .name = "file",
+       .kind = Kind::path,
+       .one_of = "source",
+       .doc = "A mesh file, relative to the scene file: legacy VTK ASCII unstructured grid "
+              "(`.vtk`; triangle, quad, tetra, hexahedron, wedge cells) or Gmsh ASCII 4.1 or "
+              "2.2 (`.msh`; the highest-dimension elements are the cells, physical groups become "
+              "node sets). All volume or all surface cells."},
+      {.section = "mesh",
+       .name = "units",
+       .kind = Kind::choice,
+       .choices = {"m", "cm", "mm", "um"},
+       .default_value = "m",
+       .doc = "Length unit of the coordinates in `file`."},
       {.section = "mesh",
        .name = "element",
        .kind = Kind::choice,
@@ -579,6 +594,8 @@ std::string_view kind_name(Kind kind) {
       return "list of maps";
     case Kind::map:
       return "map";
+    case Kind::path:
+      return "file path";
   }
   return "?";
 }

@@ -26,6 +26,7 @@ enum class Kind {
   schedule,        // list of {t, value} events
   list,            // list of maps, each described by section `child`
   map,             // map described by section `child`
+  path,            // a file path, relative to the scene file's directory
 };
 
 // Allowed interval, applied to each component of vectors and to the entry count of lists.

@@ -35,9 +35,9 @@ ResultWriter::ResultWriter(std::filesystem::path dir, std::string stem, const Mo
   const auto path = dir_ / "monitors.csv.tmp";
   monitors_.open(path);
   if (!monitors_) throw std::runtime_error(fmt::format("cannot write {}", path.string()));
-  monitors_ << "time_s,kinetic_energy_J,shape_memory_energy_J,max_residual_force_N";
-  for (int c : closed_components_) monitors_ << ",volume_" << model.components[c].name << "_m3";
-  monitors_ << '\n';
+  std::string header = "time_s,kinetic_energy_J,shape_memory_energy_J,max_residual_force_N";
+  for (int c : closed_components_) header += ",volume_" + model.components[c].name + "_m3";
+  write_monitors(header + '\n');
   const size_t n = model.rest_position.size() * 3;
   displacement_.resize(n);
   velocity_.resize(n);
@@ -65,10 +65,30 @@ void ResultWriter::frame(Simulator& sim) {
 
 void ResultWriter::monitor(Simulator& sim) {
   const std::vector<double> volumes = sim.component_volumes();
-  monitors_ << fmt::format("{},{},{},{}", sim.state().time, sim.kinetic_energy(),
-                           sim.state().shape_memory_energy, sim.max_residual_force());
-  for (int c : closed_components_) monitors_ << ',' << fmt::format("{}", volumes[c]);
-  monitors_ << '\n';
+  std::string row = fmt::format("{},{},{},{}", sim.state().time, sim.kinetic_energy(),
+                                sim.state().shape_memory_energy, sim.max_residual_force());
+  for (int c : closed_components_) row += fmt::format(",{}", volumes[c]);
+  write_monitors(row + '\n');
+  monitored_time_ = sim.state().time;
+}
+
+void ResultWriter::write_monitors(const std::string& text) {
+  monitors_ << text;
+  monitors_text_ += text;
+}
+
+void ResultWriter::restore(std::vector<PvdEntry> frames, const std::string& monitors_text) {
+  for (const PvdEntry& e : frames)
+    if (vtk_ && !std::filesystem::is_regular_file(dir_ / e.file))
+      throw std::runtime_error(fmt::format(
+          "cannot resume in {}: frame {} of the checkpoint is missing", dir_.string(), e.file));
+  pvd_ = std::move(frames);
+  const auto path = dir_ / "monitors.csv.tmp";
+  monitors_.close();
+  monitors_.open(path, std::ios::trunc);
+  if (!monitors_) throw std::runtime_error(fmt::format("cannot write {}", path.string()));
+  monitors_text_.clear();
+  write_monitors(monitors_text);
 }
 
 void ResultWriter::finish(const RunReport& report) {

@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,12 @@ class ResultWriter {
   void monitor(Simulator& sim);          // one row of monitors.csv
   void finish(const RunReport& report);  // monitors.csv complete, report.json
   int frames() const { return int(pvd_.size()); }
+  // Checkpoints: what was written so far, and resuming from it (the frames listed must be
+  // in the directory; monitors.csv starts over from the recorded text).
+  const std::vector<PvdEntry>& frame_list() const { return pvd_; }
+  const std::string& monitors_text() const { return monitors_text_; }
+  double monitored_time() const { return monitored_time_; }  // s, of the last row; NaN: none
+  void restore(std::vector<PvdEntry> frames, const std::string& monitors_text);
 
  private:
   std::filesystem::path dir_;
@@ -27,6 +34,9 @@ class ResultWriter {
   std::vector<int> closed_components_;
   std::vector<PvdEntry> pvd_;
   std::ofstream monitors_;
+  std::string monitors_text_;  // what monitors_ was given
+  double monitored_time_ = std::numeric_limits<double>::quiet_NaN();
+  void write_monitors(const std::string& text);
   std::vector<double> displacement_, velocity_, force_;  // flat xyz buffers for the writer
 };
 

@@ -187,6 +187,7 @@ class SceneBuilder {
   SimulationSpec simulation(SectionReader& reader);
   ObjectSpec object(SectionReader& reader);
   MeshSpec mesh(SectionReader& reader);
+  void check_mesh_source(SectionReader& reader);
   MaterialSpec material(SectionReader& reader);
   LoadSpec load(SectionReader& reader);
   ConstraintSpec constraint(SectionReader& reader);
@@ -266,8 +267,28 @@ MeshSpec SceneBuilder::mesh(SectionReader& reader) {
   reader.read("along", spec.along);
   reader.read("rings", spec.rings);
   reader.read("center", spec.center);
+  reader.read("file", spec.file);
+  reader.read("units", spec.units);
+  check_mesh_source(reader);
   reader.done();
   return spec;
+}
+
+// A mesh from a file takes only `units`; the generators' keys would be silently ignored.
+void SceneBuilder::check_mesh_source(SectionReader& reader) {
+  const bool from_file = reader.value_loc("file").has_value();
+  for (const io::Parameter* p : io::section_parameters("mesh")) {
+    if (p->name == "generator") continue;  // the one_of check names both
+    const bool generator_key = p->name != "file" && p->name != "units";
+    if (from_file == generator_key)
+      if (const auto at = reader.value_loc(p->name))
+        context_.error(*at, from_file ? fmt::format("'{}' belongs to generated meshes; a mesh "
+                                                    "read from 'file' takes only 'units'",
+                                                    p->name)
+                                      : fmt::format("'{}' applies only to a mesh read from "
+                                                    "'file'",
+                                                    p->name));
+  }
 }
 
 MaterialSpec SceneBuilder::material(SectionReader& reader) {

@@ -430,9 +430,16 @@ bool SectionReader::read(std::string_view name, bool& out) {
 }
 
 bool SectionReader::read(std::string_view name, std::string& out) {
-  const auto value = lookup(name, {Kind::name, Kind::choice});
+  const auto value = lookup(name, {Kind::name, Kind::choice, Kind::path});
   if (!value) return false;
   const Parameter& field = *value->parameter;
+  if (field.kind == Kind::path) {
+    const auto path = scalar(*value, "a file path");
+    if (path && path->empty()) error(value->loc, fmt::format("{} is empty", in_quotes(name)));
+    if (!path || path->empty()) return false;
+    out = *path;
+    return true;
+  }
   const bool is_choice = field.kind == Kind::choice;
   const auto word = scalar(*value, is_choice ? "one of " + join(field.choices, ", ") : "a name");
   if (!word) return false;

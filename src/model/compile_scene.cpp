@@ -3,8 +3,11 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <optional>
 
+#include "io/mesh_file.hpp"
 #include "io/parameter_table.hpp"
+#include "io/units.hpp"
 #include "phymul/model.hpp"
 
 namespace phymul {
@@ -31,15 +34,34 @@ struct Compiler {
     throw std::invalid_argument(fmt::format("unknown mesh generator '{}'", m.generator));
   }
 
-  void add_object(const ObjectSpec& o) {
+  // A mesh file's path is relative to the scene file; its problems are reported where they
+  // are in it, naming the object whose mesh it is.
+  std::optional<Mesh> read_file(const ObjectSpec& o) {
+    const std::filesystem::path path = scene.file.parent_path() / o.mesh.file;
+    const io::Unit* unit = io::find_unit(o.mesh.units);
     try {
-      const Mesh mesh = generate(o.mesh);
+      return read_mesh_file(path, unit ? unit->divisor / unit->scale : 1.0);
+    } catch (const MeshFileError& e) {
+      fail({e.file, e.line, e.column}, fmt::format("{} (the mesh of object '{}', {}:{})", e.message,
+                                                   o.name, o.loc.file, o.loc.line));
+      return std::nullopt;
+    }
+  }
+
+  void add_object(const ObjectSpec& o) {
+    std::optional<Mesh> from_file;
+    if (!o.mesh.file.empty() && !(from_file = read_file(o))) return;
+    try {
+      const Mesh mesh = from_file ? std::move(*from_file) : generate(o.mesh);
       const int c = add_elastic_component(model, o.name, mesh, o.material);
       if (o.volume_constraint) add_volume_constraint(model, c);
     } catch (const std::exception& e) {
       const std::string what = e.what();
       const std::string prefix = fmt::format("object '{}'", o.name);
-      fail(o.loc, what.starts_with(prefix) ? what : prefix + ": " + what);
+      const std::string rest = what.starts_with(prefix) ? what.substr(prefix.size()) : ": " + what;
+      const std::string source =
+          o.mesh.file.empty() ? "" : fmt::format(" (mesh file {})", o.mesh.file);
+      fail(o.loc, prefix + source + rest);
     }
   }
 

@@ -7,9 +7,12 @@
 #include <csignal>
 #include <cstdio>
 #include <fstream>
+#include <optional>
 #include <stdexcept>
 
+#include "io/checkpoint.hpp"
 #include "io/results.hpp"
+#include "io/units.hpp"
 #include "phymul/simulator.hpp"
 
 namespace phymul {
@@ -23,8 +26,12 @@ extern "C" void on_interrupt_signal(int) { g_interrupt = 1; }
 // Thrown from the static relaxation's progress callback to stop it between iterations.
 struct Interrupted {};
 
-constexpr const char* kInterruptedMessage =
-    "interrupted by a signal; the results up to the last step are written";
+std::string interrupted_message(const std::filesystem::path& dir) {
+  return fmt::format(
+      "interrupted; the results up to the last step and a checkpoint are written (continue "
+      "with: phymul run --resume {})",
+      dir.string());
+}
 
 class ProgressLine {
  public:
@@ -51,7 +58,198 @@ class ProgressLine {
   std::chrono::steady_clock::time_point last_{};
 };
 
+// Decides when the next checkpoint is due; starts counting from where the run starts.
+class CheckpointClock {
+ public:
+  CheckpointClock(const CheckpointInterval& every, long step, double time)
+      : every_(every), last_step_(step), next_time_(time + every.time) {}
+  bool due(long step, double time, double dt) {
+    bool due = every_.steps > 0 && step - last_step_ >= every_.steps;
+    if (every_.time > 0 && time >= next_time_ - 0.5 * dt) {
+      due = true;
+      while (next_time_ <= time + 0.5 * dt) next_time_ += every_.time;
+    }
+    if (due) last_step_ = step;
+    return due;
+  }
+
+ private:
+  CheckpointInterval every_;
+  long last_step_;
+  double next_time_;
+};
+
+// What the two modes' loops share.
+struct Run {
+  const Scene& scene;
+  const RunOptions& options;
+  Simulator& sim;
+  ResultWriter& out;
+  RunReport& report;
+  ProgressLine& progress;
+  std::uint64_t scene_hash, model_hash;
+  bool checkpoint_failed = false;
+
+  void save_checkpoint(long steps_done, double next_frame) {
+    Checkpoint c;
+    c.scene_file = std::filesystem::absolute(scene.file).lexically_normal().string();
+    c.scene_hash = scene_hash;
+    c.model_hash = model_hash;
+    c.static_mode = sim.model().settings.mode == SolveMode::static_equilibrium;
+    c.dt = sim.dt();
+    c.state = sim.state();
+    c.load_time = sim.load_time();
+    c.static_progress = sim.static_progress();
+    c.steps_done = steps_done;
+    c.next_frame = next_frame;
+    c.frames = out.frame_list();
+    c.monitors = out.monitors_text();
+    // A checkpoint that cannot be written (disk full) must not cost the run its results.
+    try {
+      write_checkpoint(checkpoint_path(options.output_dir), c);
+    } catch (const std::exception& e) {
+      if (!checkpoint_failed)
+        std::fprintf(stderr, "warning: %s; the run goes on without a checkpoint\n", e.what());
+      checkpoint_failed = true;
+    }
+  }
+  bool stop_requested(long steps) const {
+    return interrupt_requested() ||
+           (options.stop_after_steps > 0 && steps >= options.stop_after_steps);
+  }
+};
+
+void run_static(Run& run, const Checkpoint* from) {
+  Simulator& sim = run.sim;
+  const SimulationSpec& settings = sim.model().settings;
+  RunReport& report = run.report;
+  report.mode = "static";
+  StaticResult r;
+  CheckpointClock clock(run.options.checkpoint_every, sim.state().step, 0.0);
+  bool interrupted = !from && interrupt_requested();
+  if (interrupted) run.save_checkpoint(0, 0.0);
+  if (!interrupted) {
+    const auto check = [&](long, double residual) {
+      const StaticProgress& p = sim.static_progress();
+      const long total = p.iterations + p.step_iterations;
+      const bool stop = run.stop_requested(total);
+      if (stop || clock.due(total, 0.0, 0.0)) run.save_checkpoint(0, 0.0);
+      if (stop) throw Interrupted{};
+      run.progress.show(double(total) / double(settings.max_iterations),
+                        fmt::format("iteration {}  residual {:.3g} N", total, residual));
+    };
+    try {
+      r = from ? sim.resume_static(check) : sim.solve_static(check);
+    } catch (const Interrupted&) {
+      interrupted = true;
+    }
+  }
+  report.steps = interrupted ? sim.state().step : r.iterations;
+  report.converged = interrupted ? false : r.converged;
+  report.residual = interrupted ? sim.max_residual_force() : r.residual;
+  if (interrupted) {
+    report.status = "interrupted";
+    report.message = interrupted_message(run.options.output_dir);
+  } else if (!r.converged) {
+    report.status = "not-converged";
+    report.message = fmt::format(
+        "no equilibrium after {} iterations: the largest residual force is {:.3g} N, above "
+        "the tolerance {:.3g} N; raise max_iterations or load_steps, or add damping",
+        r.iterations, r.residual, settings.tolerance);
+  }
+  run.out.monitor(sim);
+  run.out.frame(sim);
+}
+
+void run_dynamic(Run& run, const Checkpoint* from) {
+  Simulator& sim = run.sim;
+  const SimulationSpec& settings = sim.model().settings;
+  RunReport& report = run.report;
+  ResultWriter& out = run.out;
+  // Whole steps that land exactly on the duration, none larger than the chosen dt.
+  const long steps = std::max(1L, long(std::ceil(settings.duration / sim.dt() - 1e-9)));
+  sim.set_dt(settings.duration / double(steps));
+  report.dt = sim.dt();
+  if (from && (from->dt != sim.dt() || from->steps_done >= steps))
+    throw CheckpointError(fmt::format(
+        "the checkpoint (step {}, dt {} s) does not belong to this run ({} steps of {} s)",
+        from->steps_done, from->dt, steps, sim.dt()));
+  const double interval = run.scene.output.interval;
+  double next_frame = from ? from->next_frame : interval > 0 ? interval : settings.duration;
+  const long monitor_every = std::max(1L, steps / 2000);
+  long done = from ? from->steps_done : 0;
+  CheckpointClock clock(run.options.checkpoint_every, done, sim.state().time);
+  for (long k = done + 1; k <= steps; ++k) {
+    sim.step();
+    done = k;
+    const double t = sim.state().time;
+    const bool monitored = k % monitor_every == 0 || k == steps;
+    const bool framed = k == steps || t >= next_frame - 0.5 * sim.dt();
+    if (monitored) out.monitor(sim);
+    if (framed) {
+      out.frame(sim);
+      while (next_frame <= t + 0.5 * sim.dt()) next_frame += interval > 0 ? interval : 1e300;
+    }
+    if (k == steps) break;
+    // The checkpoint holds what the uninterrupted run writes up to here; an interruption
+    // then adds this step's monitor row and frame, which resuming overwrites.
+    const bool stop = run.stop_requested(k);
+    if (clock.due(k, t, sim.dt()) || stop) run.save_checkpoint(k, next_frame);
+    if (stop) {
+      if (!monitored) out.monitor(sim);
+      if (!framed) out.frame(sim);
+      break;
+    }
+    if ((k & 63) == 0)
+      run.progress.show(double(k) / double(steps), fmt::format("t = {:.4g} s  step {}", t, k));
+  }
+  run.progress.show(double(done) / double(steps),
+                    fmt::format("t = {:.4g} s  step {}", sim.state().time, done), true);
+  report.steps = done;
+  report.residual = sim.max_residual_force();
+  report.converged = done == steps;
+  if (done < steps) {
+    report.status = "interrupted";
+    report.message = interrupted_message(run.options.output_dir);
+  }
+}
+
+std::optional<Checkpoint> checkpoint_to_resume(const Scene& scene, const RunOptions& options,
+                                               std::uint64_t scene_hash) {
+  if (!options.resume) return std::nullopt;
+  Checkpoint c = read_checkpoint(checkpoint_path(options.output_dir));
+  if (c.scene_hash != scene_hash)
+    throw CheckpointError(fmt::format(
+        "cannot resume in {}: the scene file {} changed since the checkpoint was written "
+        "(recorded from {}); resuming needs the same scene, or start a new run",
+        options.output_dir.string(), scene.file.string(), c.scene_file));
+  return c;
+}
+
 }  // namespace
+
+CheckpointInterval parse_checkpoint_interval(const std::string& text) {
+  long steps = 0;
+  char tail[16] = {};
+  if (std::sscanf(text.c_str(), "%ld %15s", &steps, tail) == 2 &&
+      (std::string(tail) == "steps" || std::string(tail) == "step")) {
+    if (steps < 1)
+      throw std::invalid_argument(
+          fmt::format("--checkpoint-every '{}': the number of steps must be 1 or more", text));
+    return {steps, 0.0};
+  }
+  const io::QuantityResult t = io::parse_quantity(text, io::Dimension::time, "--checkpoint-every");
+  if (!t.value || !(*t.value > 0))
+    throw std::invalid_argument(fmt::format(
+        "--checkpoint-every '{}': expected a number of steps ('500 steps') or a positive "
+        "simulated time with its unit ('0.2 s', '50 ms'){}",
+        text, t.error.empty() ? "" : " (" + t.error + ")"));
+  return {0, *t.value};
+}
+
+std::filesystem::path checkpointed_scene(const std::filesystem::path& output_dir) {
+  return read_checkpoint(checkpoint_path(output_dir)).scene_file;
+}
 
 void request_interrupt() noexcept { g_interrupt = 1; }
 void clear_interrupt() noexcept { g_interrupt = 0; }
@@ -73,9 +271,22 @@ RunReport run_scene(const Scene& scene, const RunOptions& options) {
       !std::filesystem::is_directory(options.output_dir, ec))
     throw std::runtime_error(fmt::format("output directory '{}' exists and is not a directory",
                                          options.output_dir.string()));
+  const std::uint64_t scene_hash = file_hash(scene.file);
+  const std::optional<Checkpoint> from = checkpoint_to_resume(scene, options, scene_hash);
   Simulator sim(compile_scene(scene));
   const Model& model = sim.model();
-  const SimulationSpec& settings = model.settings;
+  const std::uint64_t model_id = model_hash(model);
+  const bool static_mode = model.settings.mode == SolveMode::static_equilibrium;
+  if (options.checkpoint_every.time > 0 && static_mode)
+    throw std::invalid_argument(
+        "--checkpoint-every: a static run counts relaxation iterations, not simulated time; "
+        "give a number of steps, e.g. '--checkpoint-every 5000 steps'");
+  if (from && (from->model_hash != model_id || from->static_mode != static_mode ||
+               (static_mode && from->dt != sim.dt())))
+    throw CheckpointError(fmt::format(
+        "cannot resume in {}: the model compiled from {} differs from the checkpoint's (a mesh "
+        "or data file it reads changed?); start a new run",
+        options.output_dir.string(), scene.file.string()));
   std::filesystem::create_directories(options.output_dir);
   ResultWriter out(options.output_dir, scene.file.stem().string(), model, scene.output.vtk);
 
@@ -84,86 +295,40 @@ RunReport run_scene(const Scene& scene, const RunOptions& options) {
   report.dt = sim.dt();
   report.stable_dt = stable_time_step(model);
   ProgressLine progress(options.progress);
+  Run run{scene, options, sim, out, report, progress, scene_hash, model_id};
   const auto start = std::chrono::steady_clock::now();
-  out.frame(sim);
-  out.monitor(sim);
+  if (from) {
+    sim.restore(from->state, from->load_time, from->static_progress);
+    out.restore(from->frames, from->monitors);
+  } else {
+    out.frame(sim);
+    out.monitor(sim);
+  }
   try {
-    if (settings.mode == SolveMode::static_equilibrium) {
-      report.mode = "static";
-      StaticResult r;
-      bool interrupted = interrupt_requested();
-      if (!interrupted) {
-        try {
-          r = sim.solve_static([&](long it, double residual) {
-            if (interrupt_requested()) throw Interrupted{};
-            progress.show(double(it) / double(settings.max_iterations),
-                          fmt::format("iteration {}  residual {:.3g} N", it, residual));
-          });
-        } catch (const Interrupted&) {
-          interrupted = true;
-        }
-      }
-      report.steps = interrupted ? sim.state().step : r.iterations;
-      report.converged = interrupted ? false : r.converged;
-      report.residual = interrupted ? sim.max_residual_force() : r.residual;
-      if (interrupted) {
-        report.status = "interrupted";
-        report.message = kInterruptedMessage;
-      } else if (!r.converged) {
-        report.status = "not-converged";
-        report.message = fmt::format(
-            "no equilibrium after {} iterations: the largest residual force is {:.3g} N, above "
-            "the tolerance {:.3g} N; raise max_iterations or load_steps, or add damping",
-            r.iterations, r.residual, settings.tolerance);
-      }
-      out.monitor(sim);
-      out.frame(sim);
-    } else {
-      // Whole steps that land exactly on the duration, none larger than the chosen dt.
-      const long steps = std::max(1L, long(std::ceil(settings.duration / sim.dt() - 1e-9)));
-      sim.set_dt(settings.duration / double(steps));
-      report.dt = sim.dt();
-      const double interval = scene.output.interval;
-      double next_frame = interval > 0 ? interval : settings.duration;
-      const long monitor_every = std::max(1L, steps / 2000);
-      long done = 0;
-      for (long k = 1; k <= steps; ++k) {
-        sim.step();
-        done = k;
-        const double t = sim.state().time;
-        // Interrupted: this step is the last one, with its monitor row and its frame.
-        const bool last = k == steps || interrupt_requested();
-        if (k % monitor_every == 0 || last) out.monitor(sim);
-        if (last || t >= next_frame - 0.5 * sim.dt()) {
-          out.frame(sim);
-          while (next_frame <= t + 0.5 * sim.dt()) next_frame += interval > 0 ? interval : 1e300;
-        }
-        if (last) break;
-        if ((k & 63) == 0)
-          progress.show(double(k) / double(steps), fmt::format("t = {:.4g} s  step {}", t, k));
-      }
-      progress.show(double(done) / double(steps),
-                    fmt::format("t = {:.4g} s  step {}", sim.state().time, done), true);
-      report.steps = done;
-      report.residual = sim.max_residual_force();
-      report.converged = done == steps;
-      if (done < steps) {
-        report.status = "interrupted";
-        report.message = kInterruptedMessage;
-      }
-    }
+    if (static_mode)
+      run_static(run, from ? &*from : nullptr);
+    else
+      run_dynamic(run, from ? &*from : nullptr);
   } catch (const InstabilityError& e) {
     report.status = "unstable";
     report.message = e.what();
     report.steps = sim.state().step;
+    report.residual = sim.max_residual_force();
+    // The step that failed was undone: write the last good state, unless it is written.
+    const double t = sim.state().time;
+    if (out.monitored_time() != t) out.monitor(sim);
+    if (out.frame_list().empty() || out.frame_list().back().time != t) out.frame(sim);
   }
   report.wall_time =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   report.simulated_time = sim.state().time;
   report.frames = out.frames();
-  if (report.steps > 0)
+  const long steps_here = sim.state().step - (from ? from->state.step : 0);
+  if (steps_here > 0)
     report.ns_per_node_per_step =
-        report.wall_time * 1e9 / (double(report.steps) * double(report.nodes));
+        report.wall_time * 1e9 / (double(steps_here) * double(report.nodes));
+  if (report.status != "interrupted")
+    std::filesystem::remove(checkpoint_path(options.output_dir), ec);
   out.finish(report);
   return report;
 }

@@ -7,6 +7,7 @@
 #include "constraints/constraints.hpp"
 #include "constraints/contact.hpp"
 #include "forces/forces.hpp"
+#include "solver/runaway_guard.hpp"
 
 namespace phymul {
 namespace {
@@ -42,6 +43,7 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
   scratch_.assign(n, Vec3::Zero());
   a1_.assign(n, Vec3::Zero());
   size_scale_ = bounding_diagonal(model_.rest_position);
+  shortest_edge_ = runaway_edges(model_);
   const double stable = stable_time_step(model_);
   dt_ = model_.settings.dt ? *model_.settings.dt : model_.settings.dt_safety * stable;
   if (!std::isfinite(dt_)) dt_ = 1e-3;  // no stiffness at all: any step is stable
@@ -50,14 +52,32 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
 }
 
 void Simulator::step() {
-  const double load_time = state_.time + dt_;
+  const double time = state_.time, previous_load = load_time_, load_time = state_.time + dt_;
   if (model_.settings.integrator == Integrator::verlet)
     step_verlet(dt_, load_time);
   else
     step_newton_cotes(dt_, load_time);
   state_.time = load_time;
   ++state_.step;
-  check_stability();
+  checked_step(time, previous_load);
+}
+
+void Simulator::checked_step(double time, double previous_load) {
+  try {
+    check_stability();
+  } catch (const InstabilityError&) {
+    // Back to the last good state (both schemes keep x and v from before the step), so
+    // that the run can write it.
+    for (int i = 0; i < model_.node_count(); ++i)
+      state_.x[i] = x_start_[i], state_.v[i] = v_start_[i];
+    for (Eigen::Quaterniond& q : state_.rotation)
+      if (!q.coeffs().allFinite()) q = Eigen::Quaterniond::Identity();
+    state_.time = time;
+    --state_.step;
+    compute_forces(model_, state_, previous_load);
+    load_time_ = previous_load;
+    throw;
+  }
 }
 
 // Velocity Verlet; the constraint projection enters the half-step velocity as the
@@ -68,6 +88,7 @@ void Simulator::step_verlet(double h, double load_time) {
   accelerations(a);
   for (int i = 0; i < model_.node_count(); ++i) {
     x_start_[i] = s.x[i];
+    v_start_[i] = s.v[i];  // the last good state, if the step fails its checks
     s.x[i] += h * (s.v[i] + 0.5 * h * a[i]);
   }
   apply_position_constraints(model_, s.x, load_time, scratch_);
@@ -121,16 +142,9 @@ void Simulator::step_newton_cotes(double h, double load_time) {
 
 void Simulator::check_stability() const {
   const State& s = state_;
-  for (int i = 0; i < model_.node_count(); ++i) {
-    const double moved = (s.x[i] - model_.rest_position[i]).norm();
-    const bool finite = std::isfinite(moved) && s.v[i].allFinite();
-    if (finite && moved <= 10.0 * size_scale_) continue;
+  auto unstable = [&](int i, const std::string& what) {
     const int c = component_of(model_, i);
-    const std::string what =
-        finite ? fmt::format("moved {:.3g} m, more than 10 times the model's size ({:.3g} m)",
-                             moved, size_scale_)
-               : std::string("has a non-finite position or velocity");
-    throw InstabilityError(
+    return InstabilityError(
         fmt::format("the simulation became unstable at t = {:.6g} s (step {}): node {} of "
                     "component '{}' {}. The time step is {:.3g} s and the stability estimate "
                     "is {:.3g} s: set simulation.dt smaller (or 'auto' with dt_safety below "
@@ -138,7 +152,22 @@ void Simulator::check_stability() const {
                     s.time, s.step, i, c >= 0 ? model_.components[c].name : "?", what, dt_,
                     stable_time_step(model_)),
         i, s.time);
+  };
+  for (int i = 0; i < model_.node_count(); ++i) {
+    const double moved = (s.x[i] - model_.rest_position[i]).norm();
+    const bool finite = std::isfinite(moved) && s.v[i].allFinite();
+    if (finite && moved <= 10.0 * size_scale_) continue;
+    throw unstable(
+        i, finite ? fmt::format("moved {:.3g} m, more than 10 times the model's size ({:.3g} m)",
+                                moved, size_scale_)
+                  : std::string("has a non-finite position or velocity"));
   }
+  if (const auto r = find_runaway(model_, shortest_edge_, x_start_, s.x))
+    throw unstable(r->node,
+                   fmt::format("moved {:.3g} m against its neighbours in one step, more than "
+                               "{:g} of its shortest rest edge ({:.3g} m): a runaway, caught "
+                               "before any number overflowed",
+                               r->moved, kRunawayFraction, r->edge));
 }
 
 double Simulator::kinetic_energy() const {
@@ -222,54 +251,93 @@ std::vector<double> Simulator::component_volumes() const {
 
 StaticResult Simulator::relax(double load_time, long max_iterations,
                               const std::function<void(long, double)>& progress) {
-  StaticResult result;
+  static_progress_.step_iterations = 0;
+  static_progress_.previous_kinetic = 0.0;
   apply_position_constraints(model_, state_.x, load_time, scratch_);
   compute_forces(model_, state_, load_time);
   load_time_ = load_time;
-  double previous_kinetic = 0.0;
+  return continue_relax(load_time, max_iterations, progress);
+}
+
+StaticResult Simulator::continue_relax(double load_time, long max_iterations,
+                                       const std::function<void(long, double)>& progress) {
+  StaticProgress& p = static_progress_;
+  StaticResult result;
   for (;;) {
     result.residual = max_residual_force();
     if (result.residual < model_.settings.tolerance) {
       result.converged = true;
       break;
     }
-    if (result.iterations >= max_iterations) break;
+    if (p.step_iterations >= max_iterations) break;
     if (model_.settings.integrator == Integrator::verlet)
       step_verlet(dt_, load_time);
     else
       step_newton_cotes(dt_, load_time);
-    ++result.iterations;
+    ++p.step_iterations;
     ++state_.step;
-    check_stability();
+    checked_step(state_.time, load_time);
     if (model_.settings.kinetic_damping) {
       // Dynamic relaxation: at a kinetic-energy peak the system is nearest its minimum
       // along the current motion, so restart from rest there.
       const double kinetic = kinetic_energy();
-      if (kinetic < previous_kinetic) {
+      if (kinetic < p.previous_kinetic) {
         for (Vec3& v : state_.v) v.setZero();
-        previous_kinetic = 0.0;
+        p.previous_kinetic = 0.0;
       } else {
-        previous_kinetic = kinetic;
+        p.previous_kinetic = kinetic;
       }
     }
-    if (progress && result.iterations % 256 == 0) progress(result.iterations, result.residual);
+    if (progress && p.step_iterations % 256 == 0) progress(p.step_iterations, result.residual);
   }
+  result.iterations = p.step_iterations;
   state_.time = load_time;
   return result;
 }
 
 StaticResult Simulator::solve_static(const std::function<void(long, double)>& progress) {
+  static_progress_ = StaticProgress{};
+  return static_load_steps(progress);
+}
+
+StaticResult Simulator::resume_static(const std::function<void(long, double)>& progress) {
+  return static_load_steps(progress);
+}
+
+// The load steps from static_progress_ on: the one under way continues where it stopped.
+StaticResult Simulator::static_load_steps(const std::function<void(long, double)>& progress) {
   const SimulationSpec& s = model_.settings;
+  StaticProgress& p = static_progress_;
   StaticResult total;
-  for (int k = 1; k <= s.load_steps; ++k) {
-    const double load_time = s.duration * double(k) / double(s.load_steps);
-    const StaticResult r = relax(load_time, s.max_iterations - total.iterations, progress);
-    total.iterations += r.iterations;
+  const bool resuming = p.load_step > 0;
+  if (!resuming) p.load_step = 1;
+  for (bool first = true; p.load_step <= s.load_steps; ++p.load_step, first = false) {
+    const double load_time = s.duration * double(p.load_step) / double(s.load_steps);
+    const long budget = s.max_iterations - p.iterations;
+    const StaticResult r = resuming && first ? continue_relax(load_time, budget, progress)
+                                             : relax(load_time, budget, progress);
+    p.iterations += r.iterations;
+    p.step_iterations = 0;
+    total.iterations = p.iterations;
     total.residual = r.residual;
     total.converged = r.converged;
     if (!r.converged) break;
+    // Between load steps too: a run can stop (and checkpoint) there even when no load step
+    // needs 256 iterations.
+    if (progress && p.load_step < s.load_steps) progress(r.iterations, r.residual);
   }
   return total;
+}
+
+void Simulator::restore(State state, double load_time, const StaticProgress& progress) {
+  if (state.x.size() != state_.x.size() || state.v.size() != state_.v.size() ||
+      state.f.size() != state_.f.size() || state.rotation.size() != state_.rotation.size())
+    throw std::invalid_argument(fmt::format(
+        "restore: the state has {} nodes and {} rotations, the model {} and {}", state.x.size(),
+        state.rotation.size(), state_.x.size(), state_.rotation.size()));
+  state_ = std::move(state);
+  load_time_ = load_time;
+  static_progress_ = progress;
 }
 
 }  // namespace phymul

@@ -1,0 +1,37 @@
+// Meshes read from files: legacy VTK ASCII unstructured grids (.vtk, versions up to 5.1) and
+// Gmsh ASCII (.msh, versions 4.1 and 2.2). Every problem names the file, line and column,
+// what was expected and what was found.
+#pragma once
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+#include "phymul/mesh.hpp"
+
+namespace phymul {
+
+class MeshFileError : public std::runtime_error {
+ public:
+  MeshFileError(std::string file, int line, int column, std::string message);
+  std::string file;
+  int line, column;  // 1-based; 0 when the problem is the file as a whole
+  std::string message;
+};
+
+// Coordinates are divided by `divisor` (1000 for a file in millimetres), so that "4" in mm
+// gives exactly the double nearest 0.004, as the scene's units do.
+//
+// Cells: triangle, quad, tetra, hexahedron, wedge (VTK order; Gmsh prisms are reordered to
+// VTK's wedge). All volume or all surface: a VTK file mixing them is refused; in a Gmsh file
+// the cells of the highest dimension are the mesh and the lower ones (boundary triangles,
+// lines, points) only define node sets. Gmsh physical groups become node sets named as in
+// $PhysicalNames ("physical_<tag>" without a name). Points that no cell uses are refused.
+Mesh read_mesh_file(const std::filesystem::path& path, double divisor = 1.0);
+
+// The same, from text; `name` is used in messages.
+Mesh parse_vtk_mesh(std::string_view text, const std::string& name, double divisor = 1.0);
+Mesh parse_gmsh_mesh(std::string_view text, const std::string& name, double divisor = 1.0);
+
+}  // namespace phymul
