@@ -86,7 +86,9 @@ void add_fibres(Model& model, int component, const Vec3& direction, double stiff
   }
   if (bundle.polylines.rows() == 0)
     throw std::invalid_argument(fmt::format(
-        "object '{}': no two nodes lie on a line along the fibre direction [{}, {}, {}]", c.name,
+        "object '{}': no two nodes lie on a line along the fibre direction [{:.3g}, {:.3g}, "
+        "{:.3g}]; fibres follow lines of mesh nodes",
+        c.name,
         u.x(), u.y(), u.z()));
   model.fibres.push_back(std::move(bundle));
 }

@@ -136,10 +136,12 @@ std::vector<std::array<int, 2>> link_pairs(Compiler& k, const LinkSpec& l) {
   if (l.nodes.kind != NodeSelector::Kind::all && pairs.size() < from.size()) {
     for (int i : from)
       if (std::none_of(pairs.begin(), pairs.end(), [&](const auto& p) { return p[0] == i; })) {
+        const Component* c = k.find(l.object, l.loc);
+        const auto local = std::find(c->nodes.begin(), c->nodes.end(), i) - c->nodes.begin();
         k.fail(l.nodes.loc,
                fmt::format("node {} of '{}' has no node of '{}' within the tolerance {:g} m "
                            "(the nearest is {:.3g} m away)",
-                           i, l.object, l.with, l.tolerance, nearest(i)));
+                           local, l.object, l.with, l.tolerance, nearest(i)));
         return {};
       }
   }
@@ -216,6 +218,12 @@ Model compile_scene(const Scene& scene) {
         add_prescribed_displacement(k.model, {std::move(nodes), c.axes, c.displacement});
     }
     for (const LinkSpec& l : scene.doubled) {
+      if (is_rigid(k.model, l.object) && is_rigid(k.model, l.with)) {
+        k.fail(l.loc, fmt::format("doubled nodes cannot join two rigid objects ('{}' and '{}'): "
+                                  "link them by an elastic one (a ligament)",
+                                  l.object, l.with));
+        continue;
+      }
       const auto pairs = link_pairs(k, l);
       if (!pairs.empty()) add_doubled_nodes(k.model, pairs);
     }
