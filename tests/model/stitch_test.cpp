@@ -137,6 +137,35 @@ TEST(Stitch, RefusesToMergeTwoNodesOfOneComponent) {
   EXPECT_THROW(coincident_pairs(model, {0}, {1}, 0.0), std::invalid_argument);
 }
 
+// The paper's bladder and prostate: a surface organ with its volume kept, stitched to a
+// volume organ through a limited number of nodes (here one, its lowest).
+TEST(Stitch, SurfaceWithVolumeConstraintStitchedThroughOneNode) {
+  Model model;
+  add_elastic_component(model, "prostate",
+                        make_box(Vec3(0.02, 0.02, 0.02), {2, 2, 2}, CellType::hexa),
+                        testing::material(30.0));
+  const int bladder = add_elastic_component(
+      model, "bladder", make_ellipsoid_surface(Vec3(0.03, 0.03, 0.025), 2, Vec3(0, 0, 0.035)),
+      testing::surface_material(500.0, 0.05, FrameMode::polar));
+  add_volume_constraint(model, bladder);
+  const double volume0 = model.volumes[0].target_volume;
+  const auto pairs = coincident_pairs(model, model.components[1].node_sets.at("bottom"),
+                                      model.components[0].nodes, 1e-9);
+  ASSERT_EQ(pairs.size(), 1u);
+  stitch_nodes(model, pairs);
+  EXPECT_NEAR(model.volumes[0].target_volume, volume0, 1e-15);
+  add_fixed_nodes(model, model.components[1].node_sets.at("top"));  // as in the paper
+  model.gravity = Vec3(0.0, 0.0, -9.81);
+  model.damping = 5.0;
+  finalize(model);
+  Simulator sim(model);
+  const int shared = model.components[1].node_sets.at("bottom").front();
+  for (int k = 0; k < 2000; ++k) sim.step();
+  // The prostate hangs from the bladder through the shared node, which went down.
+  EXPECT_LT(sim.state().x[shared].z(), model.rest_position[shared].z() - 1e-4);
+  EXPECT_NEAR(sim.component_volumes()[1], volume0, 1e-10 * volume0);
+}
+
 TEST(Doubled, DoubledNodesCoincideAtEveryStepAndKeepMomentum) {
   Model model = two_blocks();
   add_doubled_nodes(model, face_pairs(model));
