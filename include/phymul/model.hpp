@@ -106,12 +106,12 @@ struct RigidBody {
   // Filled by finalize from the node masses: the component's nodes and the nodes doubled
   // with them (Fig. 1b), which move with the body.
   std::vector<int> nodes;
-  std::vector<Vec3> offset;                  // m, node position in the principal frame
-  double mass = 0.0;                         // kg
-  Vec3 inertia = Vec3::Zero();               // kg m^2, principal moments
-  Vec3 rest_center = Vec3::Zero();           // m
+  std::vector<Vec3> offset;                         // m, node position in the principal frame
+  double mass = 0.0;                                // kg
+  Vec3 inertia = Vec3::Zero();                      // kg m^2, principal moments
+  Vec3 rest_center = Vec3::Zero();                  // m
   Eigen::Quaterniond rest_orientation{1, 0, 0, 0};  // principal frame -> world at rest
-  double size = 0.0;                         // m, largest node distance from the centre
+  double size = 0.0;                                // m, largest node distance from the centre
 };
 
 // Contractile fibres of an active component (muscle): polylines through its nodes whose
@@ -141,10 +141,10 @@ struct Model {
   std::vector<FibreBundle> fibres;
   // Doubled nodes (Fig. 1b): groups held at one position and velocity (mass-weighted).
   // Groups touching a rigid body are moved by the body instead (finalize).
-  std::vector<std::array<int, 2>> doubled_pairs;  // as given (global ids)
-  Adjacency doubled;                              // groups among elastic nodes (finalize)
+  std::vector<std::array<int, 2>> doubled_pairs;   // as given (global ids)
+  Adjacency doubled;                               // groups among elastic nodes (finalize)
   std::vector<std::array<int, 3>> doubled_leader;  // per group and axis: a held member or -1
-  std::vector<int> rigid_body_of;                 // per node: body index or -1 (finalize)
+  std::vector<int> rigid_body_of;                  // per node: body index or -1 (finalize)
   // Per node and axis: 1/m where the node is free to move along that axis, 0 where a
   // position constraint holds it. The projection of global constraints moves nodes by it.
   std::vector<Vec3> inverse_mass;
@@ -198,15 +198,15 @@ Model compile_scene(const Scene& scene);
 struct State {
   double time = 0.0;  // s
   long step = 0;
-  std::vector<Vec3> x, v;                    // m, m/s
-  std::vector<Vec3> f;                       // N, every force but damping, at (x, time)
-  std::vector<Eigen::Quaterniond> rotation;  // per shape-memory node: last best-fit rotation
-  double shape_memory_energy = 0.0;          // J, sum of K |a - x|^2 / 2 at the last force pass
-  struct Body {                              // pose and momenta of a rigid body
-    Vec3 center = Vec3::Zero();              // m, centre of mass
+  std::vector<Vec3> x, v;                        // m, m/s
+  std::vector<Vec3> f;                           // N, every force but damping, at (x, time)
+  std::vector<Eigen::Quaterniond> rotation;      // per shape-memory node: last best-fit rotation
+  double shape_memory_energy = 0.0;              // J, sum of K |a - x|^2 / 2 at the last force pass
+  struct Body {                                  // pose and momenta of a rigid body
+    Vec3 center = Vec3::Zero();                  // m, centre of mass
     Eigen::Quaterniond orientation{1, 0, 0, 0};  // principal frame -> world
-    Vec3 momentum = Vec3::Zero();            // kg m/s
-    Vec3 angular_momentum = Vec3::Zero();    // kg m^2/s, about the centre, world frame
+    Vec3 momentum = Vec3::Zero();                // kg m/s
+    Vec3 angular_momentum = Vec3::Zero();        // kg m^2/s, about the centre, world frame
   };
   std::vector<Body> bodies;  // per Model::rigid_bodies
 };

@@ -95,7 +95,7 @@ struct NodeSelector {
 
 enum class ObjectType { elastic, rigid, active };
 
-struct MotionSpec {  // a driven rigid object
+struct MotionSpec {      // a driven rigid object
   Schedule translation;  // m
   Schedule rotation;     // rad, rotation vector
   SourceLoc loc;
@@ -103,7 +103,7 @@ struct MotionSpec {  // a driven rigid object
 
 struct FibreSpec {  // contractile fibres of an active object
   Eigen::Vector3d direction = Eigen::Vector3d::UnitX();
-  double max_contraction = 0.0;    // ratio in (0, 1)
+  double max_contraction = 0.0;     // ratio in (0, 1)
   std::optional<double> stiffness;  // N/m; the material's when absent
   Schedule activation;              // a(t) in x
   SourceLoc loc;
@@ -114,7 +114,7 @@ struct ObjectSpec {
   ObjectType type = ObjectType::elastic;
   MeshSpec mesh;
   MaterialSpec material;
-  bool volume_constraint = false;  // keep the volume enclosed by its boundary surface
+  bool volume_constraint = false;    // keep the volume enclosed by its boundary surface
   std::optional<MotionSpec> motion;  // rigid: driven when given
   FibreSpec fibres;                  // active
   SourceLoc loc;

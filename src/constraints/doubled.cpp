@@ -86,9 +86,9 @@ void project_doubled(const Model& model, std::span<Vec3> values) {
 void add_doubled_nodes(Model& model, const std::vector<std::array<int, 2>>& pairs) {
   for (const auto& [a, b] : pairs)
     if (a < 0 || a >= model.node_count() || b < 0 || b >= model.node_count() || a == b)
-      throw std::invalid_argument(fmt::format(
-          "doubled nodes: pair ({}, {}) is invalid (the model has {} nodes)", a, b,
-          model.node_count()));
+      throw std::invalid_argument(
+          fmt::format("doubled nodes: pair ({}, {}) is invalid (the model has {} nodes)", a, b,
+                      model.node_count()));
   model.doubled_pairs.insert(model.doubled_pairs.end(), pairs.begin(), pairs.end());
 }
 

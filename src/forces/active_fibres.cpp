@@ -46,18 +46,18 @@ void add_fibres(Model& model, int component, const Vec3& direction, double stiff
     throw std::invalid_argument(fmt::format(
         "object '{}': the fibre 'stiffness' must be > 0 N/m (got {})", c.name, stiffness));
   if (!(max_contraction > 0.0 && max_contraction < 1.0))
-    throw std::invalid_argument(
-        fmt::format("object '{}': 'max_contraction' must be in (0, 1) (got {})", c.name,
-                    max_contraction));
+    throw std::invalid_argument(fmt::format(
+        "object '{}': 'max_contraction' must be in (0, 1) (got {})", c.name, max_contraction));
   for (const Vec3& v : activation.values)
     if (!(v.x() >= 0.0 && v.x() <= 1.0))
-      throw std::invalid_argument(fmt::format(
-          "object '{}': the activation must be in [0, 1] (got {})", c.name, v.x()));
+      throw std::invalid_argument(
+          fmt::format("object '{}': the activation must be in [0, 1] (got {})", c.name, v.x()));
   const Vec3 u = direction.normalized();
   // Nodes on one fibre share their position across the direction: key them by it, rounded
   // to a fraction of the component's size.
   Vec3 lo = model.rest_position[c.nodes.front()], hi = lo;
-  for (int i : c.nodes) lo = lo.cwiseMin(model.rest_position[i]), hi = hi.cwiseMax(model.rest_position[i]);
+  for (int i : c.nodes)
+    lo = lo.cwiseMin(model.rest_position[i]), hi = hi.cwiseMax(model.rest_position[i]);
   const double quantum = 1e-6 * std::max((hi - lo).norm(), 1e-300);
   std::map<std::array<long long, 3>, std::vector<std::pair<double, int>>> lines;
   for (int i : c.nodes) {
@@ -88,8 +88,7 @@ void add_fibres(Model& model, int component, const Vec3& direction, double stiff
     throw std::invalid_argument(fmt::format(
         "object '{}': no two nodes lie on a line along the fibre direction [{:.3g}, {:.3g}, "
         "{:.3g}]; fibres follow lines of mesh nodes",
-        c.name,
-        u.x(), u.y(), u.z()));
+        c.name, u.x(), u.y(), u.z()));
   model.fibres.push_back(std::move(bundle));
 }
 

@@ -281,8 +281,9 @@ void SceneBuilder::object_kind(SectionReader& reader, ObjectSpec& spec,
   const SourceLoc material_at = spec.material.loc;
   if (spec.type == ObjectType::rigid) {
     if (stiffness_at)
-      context_.error(*stiffness_at, "'stiffness' applies only to elastic and active objects "
-                                    "(this object is rigid)");
+      context_.error(*stiffness_at,
+                     "'stiffness' applies only to elastic and active objects "
+                     "(this object is rigid)");
     if (spec.volume_constraint)
       context_.error(reader.value_loc("volume_constraint").value_or(reader.loc()),
                      "'volume_constraint' applies only to elastic and active objects (this "

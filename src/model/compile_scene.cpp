@@ -123,8 +123,8 @@ std::vector<std::array<int, 2>> link_pairs(Compiler& k, const LinkSpec& l) {
   const std::vector<int> to = k.select(l.with, l.with_nodes);
   if (from.empty() || to.empty()) return {};
   if (l.object == l.with) {
-    k.fail(l.loc, fmt::format("'object' and 'with' are both '{}': link two different objects",
-                              l.object));
+    k.fail(l.loc,
+           fmt::format("'object' and 'with' are both '{}': link two different objects", l.object));
     return {};
   }
   std::vector<std::array<int, 2>> pairs = coincident_pairs(k.model, from, to, l.tolerance);

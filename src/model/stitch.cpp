@@ -59,8 +59,8 @@ void stitch_nodes(Model& model, const std::vector<std::array<int, 2>>& pairs) {
   std::iota(parent.begin(), parent.end(), 0);
   for (const auto& [a, b] : pairs) {
     if (a < 0 || a >= n || b < 0 || b >= n)
-      throw std::invalid_argument(fmt::format(
-          "stitch: pair ({}, {}) is out of range (the model has {} nodes)", a, b, n));
+      throw std::invalid_argument(
+          fmt::format("stitch: pair ({}, {}) is out of range (the model has {} nodes)", a, b, n));
     parent[root(parent, std::max(a, b))] = root(parent, std::min(a, b));
   }
   check_components(model, parent);

@@ -11,7 +11,8 @@ namespace {
 
 Model strip(double ratio, Schedule activation) {
   Model model;
-  add_elastic_component(model, "muscle", make_box(Vec3(0.04, 0.01, 0.01), {4, 1, 1}, CellType::hexa),
+  add_elastic_component(model, "muscle",
+                        make_box(Vec3(0.04, 0.01, 0.01), {4, 1, 1}, CellType::hexa),
                         testing::material(20.0));
   model.components[0].kind = ComponentKind::active;
   add_fibres(model, 0, Vec3(2.0, 0.0, 0.0), 100.0, ratio, std::move(activation));
@@ -88,7 +89,8 @@ TEST(ActiveFibres, AFreeMuscleContractsTowardsItsActiveLengthAtConstantVolume) {
   // A muscle keeps its volume: fibres shorten it and it thickens. Fibres as stiff as the
   // shape memory (20 N/m), asking for 20 % shortening at full activation.
   Model model;
-  add_elastic_component(model, "muscle", make_box(Vec3(0.04, 0.01, 0.01), {8, 2, 2}, CellType::hexa),
+  add_elastic_component(model, "muscle",
+                        make_box(Vec3(0.04, 0.01, 0.01), {8, 2, 2}, CellType::hexa),
                         testing::material(20.0));
   add_volume_constraint(model, 0);
   add_fibres(model, 0, Vec3::UnitX(), 20.0, 0.2, Schedule::constant(Vec3(1.0, 0, 0)));

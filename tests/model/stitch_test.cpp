@@ -16,14 +16,14 @@ namespace {
 // Two blocks side by side along x, touching on the face x = 0 (5 x 5 coincident nodes).
 Model two_blocks(double k_left = 40.0, double k_right = 10.0) {
   Model model;
-  add_elastic_component(model, "left",
-                        make_box(Vec3(0.02, 0.02, 0.02), {4, 4, 4}, CellType::hexa,
-                                 Vec3(-0.01, 0.0, 0.0)),
-                        testing::material(k_left));
-  add_elastic_component(model, "right",
-                        make_box(Vec3(0.03, 0.02, 0.02), {6, 4, 4}, CellType::hexa,
-                                 Vec3(0.015, 0.0, 0.0)),
-                        testing::material(k_right));
+  add_elastic_component(
+      model, "left",
+      make_box(Vec3(0.02, 0.02, 0.02), {4, 4, 4}, CellType::hexa, Vec3(-0.01, 0.0, 0.0)),
+      testing::material(k_left));
+  add_elastic_component(
+      model, "right",
+      make_box(Vec3(0.03, 0.02, 0.02), {6, 4, 4}, CellType::hexa, Vec3(0.015, 0.0, 0.0)),
+      testing::material(k_right));
   return model;
 }
 
@@ -237,7 +237,8 @@ TEST(Doubled, AHeldMemberHoldsItsPartner) {
   }
   // The right block hangs from the left one's face: it moved.
   EXPECT_GT((sim.state().x[model.components[1].nodes.back()] -
-             model.rest_position[model.components[1].nodes.back()]).norm(),
+             model.rest_position[model.components[1].nodes.back()])
+                .norm(),
             1e-4);
 }
 

@@ -54,8 +54,8 @@ TEST(RigidBody, FreeBodyFallsAsHalfGTSquared) {
 // kinematics, by classical Runge-Kutta with a step 50 times smaller.
 struct Reference {
   Vec3 I;
-  Vec3 w;                    // body angular velocity
-  Eigen::Quaterniond q;      // principal frame -> world
+  Vec3 w;                // body angular velocity
+  Eigen::Quaterniond q;  // principal frame -> world
   void derivative(const Vec3& w_, const Eigen::Vector4d& q_, Vec3& dw, Eigen::Vector4d& dq) const {
     dw = Vec3((I[1] - I[2]) * w_[1] * w_[2] / I[0], (I[2] - I[0]) * w_[2] * w_[0] / I[1],
               (I[0] - I[1]) * w_[0] * w_[1] / I[2]);
@@ -166,14 +166,14 @@ TEST(RigidBody, FreeRigidElasticAssemblyKeepsItsMomentum) {
   // A rigid plate and an elastic block sharing the plate's top face; random initial
   // velocities of the elastic nodes, no external force.
   Model model;
-  add_rigid_component(model, "plate",
-                      make_box(Vec3(0.02, 0.02, 0.005), {2, 2, 1}, CellType::hexa,
-                               Vec3(0.0, 0.0, -0.0025)),
-                      testing::material(1.0));
-  add_elastic_component(model, "block",
-                        make_box(Vec3(0.02, 0.02, 0.02), {2, 2, 2}, CellType::hexa,
-                                 Vec3(0.0, 0.0, 0.01)),
-                        testing::material(50.0));
+  add_rigid_component(
+      model, "plate",
+      make_box(Vec3(0.02, 0.02, 0.005), {2, 2, 1}, CellType::hexa, Vec3(0.0, 0.0, -0.0025)),
+      testing::material(1.0));
+  add_elastic_component(
+      model, "block",
+      make_box(Vec3(0.02, 0.02, 0.02), {2, 2, 2}, CellType::hexa, Vec3(0.0, 0.0, 0.01)),
+      testing::material(50.0));
   const auto pairs =
       coincident_pairs(model, model.components[0].nodes, model.components[1].nodes, 1e-9);
   ASSERT_EQ(pairs.size(), 9u);
@@ -217,12 +217,11 @@ TEST(RigidBody, DegenerateBodiesAreRefused) {
   Model model;
   add_rigid_component(model, "a", make_box(Vec3(0.01, 0.01, 0.01), {1, 1, 1}, CellType::hexa),
                       testing::material(1.0));
-  add_rigid_component(model, "b",
-                      make_box(Vec3(0.01, 0.01, 0.01), {1, 1, 1}, CellType::hexa,
-                               Vec3(0.01, 0.0, 0.0)),
-                      testing::material(1.0));
-  add_doubled_nodes(model, coincident_pairs(model, model.components[0].nodes,
-                                            model.components[1].nodes, 1e-9));
+  add_rigid_component(
+      model, "b", make_box(Vec3(0.01, 0.01, 0.01), {1, 1, 1}, CellType::hexa, Vec3(0.01, 0.0, 0.0)),
+      testing::material(1.0));
+  add_doubled_nodes(
+      model, coincident_pairs(model, model.components[0].nodes, model.components[1].nodes, 1e-9));
   EXPECT_THROW(
       {
         try {
