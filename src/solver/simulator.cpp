@@ -38,7 +38,7 @@ int component_of(const Model& model, int node) {
 Simulator::Simulator(Model model) : model_(std::move(model)) {
   if (model_.inverse_mass.size() != model_.rest_position.size()) finalize(model_);
   state_ = make_state(model_);
-  place_rigid_nodes(model_, state_);
+  drift_rigid_bodies(model_, state_, 0.0, 0.0);  // driven bodies at their t = 0 pose
   const size_t n = model_.rest_position.size();
   x_start_.assign(n, Vec3::Zero());
   v_start_.assign(n, Vec3::Zero());
@@ -244,6 +244,7 @@ std::vector<double> Simulator::component_volumes() const {
 StaticResult Simulator::relax(double load_time, long max_iterations,
                               const std::function<void(long, double)>& progress) {
   StaticResult result;
+  drift_rigid_bodies(model_, state_, 0.0, load_time);  // driven bodies at their new pose
   apply_position_constraints(model_, state_.x, load_time, scratch_);
   compute_forces(model_, state_, load_time);
   load_time_ = load_time;

@@ -236,3 +236,44 @@ TEST(RigidBody, DegenerateBodiesAreRefused) {
 
 }  // namespace
 }  // namespace phymul
+
+namespace phymul {
+namespace {
+
+// Static mode with a driven body: each load step starts from the body's new pose, and the
+// elastic block doubled to it follows.
+TEST(RigidBody, StaticLoadStepsMoveADrivenBody) {
+  Model model;
+  add_rigid_component(
+      model, "plate",
+      make_box(Vec3(0.02, 0.02, 0.005), {2, 2, 1}, CellType::hexa, Vec3(0.0, 0.0, 0.0225)),
+      testing::material(1.0), true, Schedule{{0.0, 1.0}, {Vec3::Zero(), Vec3(0.0, 0.0, 0.002)}});
+  const int block = add_elastic_component(
+      model, "block",
+      make_box(Vec3(0.02, 0.02, 0.02), {2, 2, 2}, CellType::hexa, Vec3(0.0, 0.0, 0.01)),
+      testing::material(50.0));
+  add_doubled_nodes(model, coincident_pairs(model, model.components[block].node_sets.at("top"),
+                                            model.components[0].nodes, 1e-9));
+  add_fixed_nodes(model, model.components[block].node_sets.at("bottom"));
+  model.settings.mode = SolveMode::static_equilibrium;
+  model.settings.load_steps = 2;
+  model.settings.tolerance = 1e-9;
+  finalize(model);
+  Simulator sim(model);
+  const StaticResult r = sim.solve_static();
+  ASSERT_TRUE(r.converged);
+  for (int i : sim.model().rigid_bodies[0].nodes)
+    EXPECT_NEAR((sim.state().x[i] - model.rest_position[i] - Vec3(0, 0, 0.002)).norm(), 0.0, 1e-12);
+  // The block is stretched: its mid-height nodes rose by about half the plate's move.
+  double mid = 0.0;
+  int count = 0;
+  for (int i : model.components[block].nodes)
+    if (std::abs(model.rest_position[i].z() - 0.01) < 1e-9)
+      mid += sim.state().x[i].z() - model.rest_position[i].z(), ++count;
+  mid /= count;
+  EXPECT_GT(mid, 0.3 * 0.002);
+  EXPECT_LT(mid, 0.7 * 0.002);
+}
+
+}  // namespace
+}  // namespace phymul
