@@ -164,6 +164,12 @@ bool is_rigid(const Model& model, const std::string& object) {
 void add_links(Compiler& k, const Scene& scene) {
   std::vector<std::array<int, 2>> stitched;
   for (const LinkSpec& l : scene.stitches) {
+    if (is_rigid(k.model, l.object) && is_rigid(k.model, l.with)) {
+      k.fail(l.loc, fmt::format("a stitch cannot join two rigid objects ('{}' and '{}'): link "
+                                "them by an elastic one (a ligament)",
+                                l.object, l.with));
+      continue;
+    }
     const auto pairs = link_pairs(k, l);
     stitched.insert(stitched.end(), pairs.begin(), pairs.end());
   }
