@@ -195,20 +195,23 @@ void finalize(Model& model);
 // node, a volume constraint on an open surface, ...) throw SceneError with their location.
 Model compile_scene(const Scene& scene);
 
+// Pose and momenta of a rigid body.
+struct RigidBodyState {
+  Vec3 center = Vec3::Zero();                  // m, centre of mass
+  Eigen::Quaterniond orientation{1, 0, 0, 0};  // principal frame -> world
+  Vec3 momentum = Vec3::Zero();                // kg m/s
+  Vec3 angular_momentum = Vec3::Zero();        // kg m^2/s, about the centre, world frame
+};
+
 struct State {
   double time = 0.0;  // s
   long step = 0;
-  std::vector<Vec3> x, v;                        // m, m/s
-  std::vector<Vec3> f;                           // N, every force but damping, at (x, time)
-  std::vector<Eigen::Quaterniond> rotation;      // per shape-memory node: last best-fit rotation
-  double shape_memory_energy = 0.0;              // J, sum of K |a - x|^2 / 2 at the last force pass
-  struct Body {                                  // pose and momenta of a rigid body
-    Vec3 center = Vec3::Zero();                  // m, centre of mass
-    Eigen::Quaterniond orientation{1, 0, 0, 0};  // principal frame -> world
-    Vec3 momentum = Vec3::Zero();                // kg m/s
-    Vec3 angular_momentum = Vec3::Zero();        // kg m^2/s, about the centre, world frame
-  };
-  std::vector<Body> bodies;  // per Model::rigid_bodies
+  std::vector<Vec3> x, v;                    // m, m/s
+  std::vector<Vec3> f;                       // N, every force but damping, at (x, time)
+  std::vector<Eigen::Quaterniond> rotation;  // per shape-memory node: last best-fit rotation
+  double shape_memory_energy = 0.0;          // J, sum of K |a - x|^2 / 2 at the last force pass
+
+  std::vector<RigidBodyState> bodies;  // per Model::rigid_bodies
 };
 
 State make_state(const Model& model);

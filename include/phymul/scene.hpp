@@ -114,7 +114,8 @@ struct ObjectSpec {
   ObjectType type = ObjectType::elastic;
   MeshSpec mesh;
   MaterialSpec material;
-  bool volume_constraint = false;    // keep the volume enclosed by its boundary surface
+  bool volume_constraint = false;  // keep the volume enclosed by its boundary surface
+
   std::optional<MotionSpec> motion;  // rigid: driven when given
   FibreSpec fibres;                  // active
   SourceLoc loc;

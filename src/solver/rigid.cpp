@@ -84,7 +84,7 @@ void compute_inertia(const Model& model, const std::vector<int>& anchor, RigidBo
   }
 }
 
-Vec3 angular_velocity(const RigidBody& r, const State::Body& s) {
+Vec3 angular_velocity(const RigidBody& r, const RigidBodyState& s) {
   const Eigen::Matrix3d R = s.orientation.toRotationMatrix();
   return R * (R.transpose() * s.angular_momentum).cwiseQuotient(r.inertia);
 }
@@ -121,7 +121,7 @@ void finalize_rigid_bodies(Model& model) {
 }
 
 void init_rigid_states(const Model& model, State& state) {
-  state.bodies.assign(model.rigid_bodies.size(), State::Body{});
+  state.bodies.assign(model.rigid_bodies.size(), RigidBodyState{});
   for (size_t b = 0; b < model.rigid_bodies.size(); ++b) {
     state.bodies[b].center = model.rigid_bodies[b].rest_center;
     state.bodies[b].orientation = model.rigid_bodies[b].rest_orientation;
@@ -164,7 +164,7 @@ void kick_rigid_bodies(const Model& model, State& state, double h) {
 void drift_rigid_bodies(const Model& model, State& state, double h, double load_time) {
   for (int b = 0; b < int(model.rigid_bodies.size()); ++b) {
     const RigidBody& r = model.rigid_bodies[b];
-    State::Body& s = state.bodies[b];
+    RigidBodyState& s = state.bodies[b];
     if (r.driven) {
       s.center = r.rest_center + r.translation.at(load_time);
       s.orientation = (rotation_vector(r.rotation.at(load_time)) * r.rest_orientation).normalized();
@@ -186,7 +186,7 @@ void place_rigid_nodes(const Model& model, State& state) {
   for (int b = 0; b < int(model.rigid_bodies.size()); ++b) {
     const RigidBody& r = model.rigid_bodies[b];
     if (r.driven) continue;
-    const State::Body& s = state.bodies[b];
+    const RigidBodyState& s = state.bodies[b];
     const Eigen::Matrix3d R = s.orientation.toRotationMatrix();
     const Vec3 V = s.momentum / r.mass;
     const Vec3 w = angular_velocity(r, s);
@@ -199,7 +199,7 @@ void place_rigid_nodes(const Model& model, State& state) {
 }
 
 void stop_rigid_bodies(State& state) {
-  for (State::Body& s : state.bodies) s.momentum.setZero(), s.angular_momentum.setZero();
+  for (RigidBodyState& s : state.bodies) s.momentum.setZero(), s.angular_momentum.setZero();
 }
 
 double rigid_residual(const Model& model, const State& state) {

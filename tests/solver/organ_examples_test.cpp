@@ -58,7 +58,7 @@ TEST(OrganExamples, LigamentStaticEquilibriumMatchesTheHandCalculation) {
   Vec3 force, torque;
   rigid_load(model, sim.state(), lower, force, torque, false);
   EXPECT_LT(force.norm(), 1e-6);
-  const State::Body& b = sim.state().bodies[lower];
+  const RigidBodyState& b = sim.state().bodies[lower];
   EXPECT_LT(b.center.head<2>().norm(), 1e-9);
   EXPECT_LT(b.orientation.angularDistance(model.rigid_bodies[lower].rest_orientation), 1e-9);
   // It went down: the ligament stretched under (bone + load) = 0.175 N.

@@ -87,7 +87,7 @@ TEST(RigidBody, TorqueFreeAsymmetricBodyKeepsAngularMomentumAndTumblesCorrectly)
   ASSERT_GT(r.inertia[2] - r.inertia[1], 0.1 * r.inertia[1]);
   // Near the intermediate axis: the body flips over (Dzhanibekov), a demanding motion.
   const Vec3 w0(0.3, 20.0, 0.5);  // rad/s, principal frame
-  State::Body& body = sim.state().bodies[0];
+  RigidBodyState& body = sim.state().bodies[0];
   const Eigen::Matrix3d R0 = body.orientation.toRotationMatrix();
   body.angular_momentum = R0 * r.inertia.cwiseProduct(w0);
   place_rigid_nodes(sim.model(), sim.state());
@@ -130,7 +130,7 @@ TEST(RigidBody, ConvergesToTheReferenceAtSecondOrder) {
     Simulator sim(model);
     const RigidBody& r = sim.model().rigid_bodies[0];
     const Vec3 w0(2.0, 8.0, 3.0);
-    State::Body& body = sim.state().bodies[0];
+    RigidBodyState& body = sim.state().bodies[0];
     body.angular_momentum = body.orientation.toRotationMatrix() * r.inertia.cwiseProduct(w0);
     place_rigid_nodes(sim.model(), sim.state());
     Reference ref{r.inertia, w0, body.orientation};
@@ -192,7 +192,7 @@ TEST(RigidBody, FreeRigidElasticAssemblyKeepsItsMomentum) {
     return p;
   };
   auto angular = [&] {
-    const State::Body& b = sim.state().bodies[0];
+    const RigidBodyState& b = sim.state().bodies[0];
     Vec3 l = b.angular_momentum + b.center.cross(b.momentum);
     for (int i = 0; i < model.node_count(); ++i)
       if (sim.model().rigid_body_of[i] < 0)
