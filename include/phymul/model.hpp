@@ -188,6 +188,9 @@ void add_doubled_nodes(Model& model, const std::vector<std::array<int, 2>>& pair
 // (nodes whose positions across the direction agree within 1e-6 of the mesh size).
 void add_fibres(Model& model, int component, const Vec3& direction, double stiffness,
                 double max_contraction, Schedule activation);
+// Fibres along given polylines (global node ids of the component, in order).
+void add_fibre_polylines(Model& model, int component, const std::vector<std::vector<int>>& lines,
+                         double stiffness, double max_contraction, Schedule activation);
 // Recomputes derived arrays (inverse_mass); call after the last add_*.
 void finalize(Model& model);
 

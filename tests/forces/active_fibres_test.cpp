@@ -79,6 +79,27 @@ TEST(ActiveFibres, ForcesAreMinusTheEnergyGradient) {
     }
 }
 
+TEST(ActiveFibres, AListedPolylineBendsThroughItsNodes) {
+  Model model;
+  add_elastic_component(model, "muscle",
+                        make_box(Vec3(0.02, 0.02, 0.01), {2, 2, 1}, CellType::hexa),
+                        testing::material(20.0));
+  // An L through the bottom layer: (0,0) -> (2,0) -> (2,2), ids i + 3 j.
+  add_fibre_polylines(model, 0, {{0, 1, 2, 5, 8}}, 10.0, 0.5, Schedule::constant(Vec3(1, 0, 0)));
+  const FibreBundle& b = model.fibres[0];
+  ASSERT_EQ(b.rest_length.size(), 4u);
+  std::vector<Vec3> f(size_t(model.node_count()), Vec3::Zero());
+  add_fibre_forces(b, model.rest_position, 0.0, f);
+  // Each segment (1 cm, active length 5 mm) pulls with 10 N/m x 5 mm = 0.05 N: the corner
+  // node 2 is pulled along both legs, towards the inside of the L.
+  EXPECT_NEAR((f[2] - Vec3(-0.05, 0.05, 0.0)).norm(), 0.0, 1e-15);
+  EXPECT_NEAR((f[0] - Vec3(0.05, 0.0, 0.0)).norm(), 0.0, 1e-15);
+  EXPECT_NEAR((f[8] - Vec3(0.0, -0.05, 0.0)).norm(), 0.0, 1e-15);
+  EXPECT_THROW(add_fibre_polylines(model, 0, {{0, 99}}, 10.0, 0.5, Schedule{}),
+               std::invalid_argument);
+  EXPECT_THROW(add_fibre_polylines(model, 0, {{3}}, 10.0, 0.5, Schedule{}), std::invalid_argument);
+}
+
 TEST(ActiveFibres, ActivationOutsideItsRangeIsRefused) {
   EXPECT_THROW(strip(0.3, Schedule::constant(Vec3(1.5, 0, 0))), std::invalid_argument);
   EXPECT_THROW(strip(1.0, Schedule::constant(Vec3::Zero())), std::invalid_argument);
