@@ -9,6 +9,7 @@
 
 #include "phymul/mesh.hpp"
 #include "phymul/scene.hpp"
+#include "phymul/schedule.hpp"
 
 namespace phymul {
 
@@ -80,13 +81,48 @@ struct RigidObstacle {
   double friction = 0.0;      // Coulomb coefficient; not implemented yet: must be 0
 };
 
+enum class ComponentKind { elastic, rigid, active };
+
 struct Component {
   std::string name;
-  int first_node = 0, node_count = 0;
+  ComponentKind kind = ComponentKind::elastic;
+  // Global id of each node of the component's mesh, in mesh order. Stitching (stitch.cpp)
+  // merges nodes, so a shared border node appears in the lists of both components.
+  std::vector<int> nodes;
   int first_cell = 0, cell_count = 0;
   bool volumetric = true;
   std::vector<Triangle> boundary;                     // global ids; empty when the surface is open
   std::map<std::string, std::vector<int>> node_sets;  // global ids
+};
+
+// A rigid component (bone, instrument) moving as one body: its nodes' positions are set
+// from the body's pose. Free bodies integrate the force and torque of the forces on their
+// nodes; driven ones follow their schedules (an instrument).
+struct RigidBody {
+  int component = 0;
+  bool driven = false;
+  Schedule translation;  // m, of the rest centre of mass (driven)
+  Schedule rotation;     // rad, rotation vector about the rest centre of mass (driven)
+  // Filled by finalize from the node masses: the component's nodes and the nodes doubled
+  // with them (Fig. 1b), which move with the body.
+  std::vector<int> nodes;
+  std::vector<Vec3> offset;                         // m, node position in the principal frame
+  double mass = 0.0;                                // kg
+  Vec3 inertia = Vec3::Zero();                      // kg m^2, principal moments
+  Vec3 rest_center = Vec3::Zero();                  // m
+  Eigen::Quaterniond rest_orientation{1, 0, 0, 0};  // principal frame -> world at rest
+  double size = 0.0;                                // m, largest node distance from the centre
+};
+
+// Contractile fibres of an active component (muscle): polylines through its nodes whose
+// segments are tension-only springs of rest length l0 (1 - a(t) ratio).
+struct FibreBundle {
+  int component = 0;
+  Adjacency polylines;              // global node ids, in order along each fibre
+  std::vector<double> rest_length;  // m, per segment, in polyline order
+  double stiffness = 0.0;           // N/m, per segment
+  double max_contraction = 0.0;     // ratio in (0, 1)
+  Schedule activation;              // a(t) in [0, 1], in x
 };
 
 struct Model {
@@ -101,6 +137,14 @@ struct Model {
   std::vector<PrescribedDisplacement> prescribed;
   std::vector<PressureLoad> pressures;
   std::vector<RigidObstacle> obstacles;
+  std::vector<RigidBody> rigid_bodies;
+  std::vector<FibreBundle> fibres;
+  // Doubled nodes (Fig. 1b): groups held at one position and velocity (mass-weighted).
+  // Groups touching a rigid body are moved by the body instead (finalize).
+  std::vector<std::array<int, 2>> doubled_pairs;   // as given (global ids)
+  Adjacency doubled;                               // groups among elastic nodes (finalize)
+  std::vector<std::array<int, 3>> doubled_leader;  // per group and axis: a held member or -1
+  std::vector<int> rigid_body_of;                  // per node: body index or -1 (finalize)
   // Per node and axis: 1/m where the node is free to move along that axis, 0 where a
   // position constraint holds it. The projection of global constraints moves nodes by it.
   std::vector<Vec3> inverse_mass;
@@ -125,12 +169,42 @@ void add_rigid_obstacle(Model& model, RigidObstacle obstacle);
 // line through axis_point along axis_direction (the paper's cylinder-shaped probe pressure).
 std::vector<Triangle> faces_in_cylinder(const Model& model, int component, const Vec3& axis_point,
                                         const Vec3& axis_direction, double radius);
+// A rigid component: nodes, cells and masses from the mesh and material (stiffness unused).
+// A driven one follows translation and rotation (rad, rotation vector) schedules.
+int add_rigid_component(Model& model, const std::string& name, const Mesh& mesh,
+                        const MaterialSpec& material, bool driven = false,
+                        Schedule translation = {}, Schedule rotation = {});
+// Merges each pair (keep, drop) of global node ids into one node (masses add, the rest
+// position is the mass-weighted mean): the shared border nodes of Fig. 1a. Node ids above
+// a dropped one shift down. Call after the components and before loads and constraints.
+void stitch_nodes(Model& model, const std::vector<std::array<int, 2>>& pairs);
+// Pairs (a, b), a from `from`, b from `to`, whose rest positions are within tolerance (m),
+// each node paired with its nearest candidate.
+std::vector<std::array<int, 2>> coincident_pairs(const Model& model, const std::vector<int>& from,
+                                                 const std::vector<int>& to, double tolerance);
+// Holds each pair at one position and one velocity (Fig. 1b); see Model::doubled.
+void add_doubled_nodes(Model& model, const std::vector<std::array<int, 2>>& pairs);
+// Fibres of an active component along `direction`: the lines of its nodes parallel to it
+// (nodes whose positions across the direction agree within 1e-6 of the mesh size).
+void add_fibres(Model& model, int component, const Vec3& direction, double stiffness,
+                double max_contraction, Schedule activation);
+// Fibres along given polylines (global node ids of the component, in order).
+void add_fibre_polylines(Model& model, int component, const std::vector<std::vector<int>>& lines,
+                         double stiffness, double max_contraction, Schedule activation);
 // Recomputes derived arrays (inverse_mass); call after the last add_*.
 void finalize(Model& model);
 
 // A scene file's description into a model; semantic problems (a node set that selects no
 // node, a volume constraint on an open surface, ...) throw SceneError with their location.
 Model compile_scene(const Scene& scene);
+
+// Pose and momenta of a rigid body.
+struct RigidBodyState {
+  Vec3 center = Vec3::Zero();                  // m, centre of mass
+  Eigen::Quaterniond orientation{1, 0, 0, 0};  // principal frame -> world
+  Vec3 momentum = Vec3::Zero();                // kg m/s
+  Vec3 angular_momentum = Vec3::Zero();        // kg m^2/s, about the centre, world frame
+};
 
 struct State {
   double time = 0.0;  // s
@@ -139,6 +213,8 @@ struct State {
   std::vector<Vec3> f;                       // N, every force but damping, at (x, time)
   std::vector<Eigen::Quaterniond> rotation;  // per shape-memory node: last best-fit rotation
   double shape_memory_energy = 0.0;          // J, sum of K |a - x|^2 / 2 at the last force pass
+
+  std::vector<RigidBodyState> bodies;  // per Model::rigid_bodies
 };
 
 State make_state(const Model& model);

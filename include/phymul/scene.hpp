@@ -95,11 +95,39 @@ struct NodeSelector {
   SourceLoc loc;
 };
 
+enum class ObjectType { elastic, rigid, active };
+
+struct MotionSpec {      // a driven rigid object
+  Schedule translation;  // m
+  Schedule rotation;     // rad, rotation vector
+  SourceLoc loc;
+};
+
+struct FibreSpec {  // contractile fibres of an active object
+  Eigen::Vector3d direction = Eigen::Vector3d::UnitX();
+  double max_contraction = 0.0;     // ratio in (0, 1)
+  std::optional<double> stiffness;  // N/m; the material's when absent
+  Schedule activation;              // a(t) in x
+  SourceLoc loc;
+};
+
 struct ObjectSpec {
   std::string name;
+  ObjectType type = ObjectType::elastic;
   MeshSpec mesh;
   MaterialSpec material;
   bool volume_constraint = false;  // keep the volume enclosed by its boundary surface
+
+  std::optional<MotionSpec> motion;  // rigid: driven when given
+  FibreSpec fibres;                  // active
+  SourceLoc loc;
+};
+
+// Coincident nodes of two objects: merged (stitches, Fig. 1a) or doubled (Fig. 1b).
+struct LinkSpec {
+  std::string object, with;
+  NodeSelector nodes, with_nodes;
+  double tolerance = 1e-6;  // m
   SourceLoc loc;
 };
 
@@ -132,6 +160,7 @@ struct Scene {
   std::vector<ObjectSpec> objects;
   std::vector<LoadSpec> loads;
   std::vector<ConstraintSpec> constraints;
+  std::vector<LinkSpec> stitches, doubled;
   OutputSpec output;
 };
 

@@ -22,7 +22,8 @@ double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_m
                       std::span<Vec3> x, std::span<Vec3> grad);
 
 // All position constraints in the DESIGN's order: prescribed, rigid obstacles (contact.hpp),
-// then volumes (a few Gauss-Seidel sweeps when surfaces share nodes).
+// then volumes (a few Gauss-Seidel sweeps when surfaces share nodes), then doubled nodes
+// (doubled.hpp). Rigid bodies place their nodes before (solver/rigid.hpp).
 void apply_position_constraints(const Model& model, std::span<Vec3> x, double load_time,
                                 std::span<Vec3> scratch);
 

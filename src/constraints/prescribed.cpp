@@ -1,5 +1,6 @@
 #include "constraints/constraints.hpp"
 #include "constraints/contact.hpp"
+#include "constraints/doubled.hpp"
 
 namespace phymul {
 
@@ -23,6 +24,8 @@ void apply_position_constraints(const Model& model, std::span<Vec3> x, double lo
   for (int sweep = 0; sweep < sweeps; ++sweep)
     for (const VolumeConstraint& c : model.volumes)
       project_volume(c, model.inverse_mass, x, scratch);
+  // Doubled nodes last, so that they coincide exactly after every projection.
+  project_doubled(model, x);
 }
 
 }  // namespace phymul

@@ -1,5 +1,6 @@
 #include "forces/forces.hpp"
 
+#include "forces/active_fibres.hpp"
 #include "forces/pressure.hpp"
 #include "forces/shape_memory.hpp"
 
@@ -19,6 +20,7 @@ void compute_forces(const Model& model, State& s, double load_time) {
     s.shape_memory_energy += add_shape_memory_forces(m, model.rest_position, s.x, rotations, s.f);
     first_rotation += m.nodes.size();
   }
+  for (const FibreBundle& fibres : model.fibres) add_fibre_forces(fibres, s.x, load_time, s.f);
 }
 
 }  // namespace phymul

@@ -190,11 +190,24 @@ ShapeMemory build_shape_memory(const std::string& component, const Mesh& mesh, i
   m.reaction = material.reaction;
   m.surface = !mesh.volumetric();
   const Adjacency local = m.surface ? ordered_one_rings(mesh) : edge_neighbours(mesh);
-  std::vector<int> nb;
   for (int i = 0; i < local.rows(); ++i) {
     if (local.row(i).empty()) continue;  // a node no cell uses carries no memory
-    nb.clear();
-    for (int j : local.row(i)) nb.push_back(first_node + j);
+    m.nodes.push_back(first_node + i);
+    for (int j : local.row(i)) m.neighbours.indices.push_back(first_node + j);
+    m.neighbours.offsets.push_back(int(m.neighbours.indices.size()));
+  }
+  memorise_rest_shape(m, rest);
+  return m;
+}
+
+void memorise_rest_shape(ShapeMemory& m, std::span<const Vec3> rest) {
+  m.frame_pair.clear();
+  m.normal_weight.clear();
+  m.rest_centroid.clear();
+  m.rest_normal.clear();
+  m.rest_offset.clear();
+  for (int k = 0; k < int(m.nodes.size()); ++k) {
+    const auto nb = m.neighbours.row(k);
     const Vec3 G0 = centroid(nb, rest);
     const auto [pair, sine] = nb.size() >= 2 ? best_pair(nb, rest, G0)
                                              : std::pair<std::array<int, 2>, double>{{0, 0}, 0.0};
@@ -202,11 +215,7 @@ ShapeMemory build_shape_memory(const std::string& component, const Mesh& mesh, i
       throw std::invalid_argument(fmt::format(
           "component '{}': node {} has {} neighbour(s), all on one line; local shape memory "
           "needs at least three neighbours not on a line",
-          component, i, nb.size()));
-    const int k = int(m.nodes.size());
-    m.nodes.push_back(first_node + i);
-    m.neighbours.indices.insert(m.neighbours.indices.end(), nb.begin(), nb.end());
-    m.neighbours.offsets.push_back(int(m.neighbours.indices.size()));
+          m.component, m.nodes[k], nb.size()));
     m.frame_pair.push_back(pair);
 
     const Eigen::Matrix3d C = covariance_about(nb, rest, G0);
@@ -221,9 +230,8 @@ ShapeMemory build_shape_memory(const std::string& component, const Mesh& mesh, i
     // In polar mode the rest frame is the identity by construction (A0 is symmetric).
     const Eigen::Matrix3d R0 =
         m.frame == FrameMode::frame ? local_frame(m, k, rest, G0) : Eigen::Matrix3d::Identity();
-    m.rest_offset.push_back(R0.transpose() * (rest[first_node + i] - G0));
+    m.rest_offset.push_back(R0.transpose() * (rest[m.nodes[k]] - G0));
   }
-  return m;
 }
 
 Vec3 attraction_position(const ShapeMemory& m, int k, std::span<const Vec3> rest,

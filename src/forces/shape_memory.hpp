@@ -14,6 +14,10 @@ namespace phymul {
 ShapeMemory build_shape_memory(const std::string& component, const Mesh& mesh, int first_node,
                                const MaterialSpec& material, std::span<const Vec3> rest);
 
+// (Re)computes the rest-shape data of `memory` (centroids, offsets, frames) from the rest
+// positions, for its nodes and neighbours as they stand (after stitching, say).
+void memorise_rest_shape(ShapeMemory& memory, std::span<const Vec3> rest);
+
 // Attraction position (m) of memory node k given current positions x; updates the
 // warm-started rotation q (polar mode).
 Vec3 attraction_position(const ShapeMemory& memory, int k, std::span<const Vec3> rest,

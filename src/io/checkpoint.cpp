@@ -123,6 +123,15 @@ std::string payload(const Checkpoint& c) {
   for (const Eigen::Quaterniond& q : s.rotation)
     for (double v : {q.w(), q.x(), q.y(), q.z()}) w.f64(v);
   w.f64(s.shape_memory_energy);
+  w.u64(s.bodies.size());
+  for (const RigidBodyState& b : s.bodies) {
+    for (double v : {b.center.x(), b.center.y(), b.center.z()}) w.f64(v);
+    for (double v : {b.orientation.w(), b.orientation.x(), b.orientation.y(), b.orientation.z()})
+      w.f64(v);
+    for (double v : {b.momentum.x(), b.momentum.y(), b.momentum.z()}) w.f64(v);
+    for (double v : {b.angular_momentum.x(), b.angular_momentum.y(), b.angular_momentum.z()})
+      w.f64(v);
+  }
   w.f64(c.load_time);
   w.i64(c.static_progress.load_step);
   w.i64(c.static_progress.iterations);
@@ -166,6 +175,19 @@ Checkpoint parse_payload(Reader& r) {
     q = Eigen::Quaterniond(w, x, y, z);
   }
   s.shape_memory_energy = r.f64("shape memory energy");
+  s.bodies.resize(r.count("rigid bodies", 13 * sizeof(double)));
+  for (RigidBodyState& b : s.bodies) {
+    auto vec = [&r](const char* field) {
+      const double x = r.f64(field), y = r.f64(field), z = r.f64(field);
+      return Vec3(x, y, z);
+    };
+    b.center = vec("rigid body centre");
+    const double w = r.f64("rigid body orientation"), x = r.f64("rigid body orientation"),
+                 y = r.f64("rigid body orientation"), z = r.f64("rigid body orientation");
+    b.orientation = Eigen::Quaterniond(w, x, y, z);
+    b.momentum = vec("rigid body momentum");
+    b.angular_momentum = vec("rigid body angular momentum");
+  }
   c.load_time = r.f64("load time");
   StaticProgress& p = c.static_progress;
   p.load_step = int(non_negative(r, r.i64("load step"), "load step"));

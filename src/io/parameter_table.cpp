@@ -20,6 +20,8 @@ const Condition kCylinder{"generator", {"cylinder"}};
 const Condition kRound{"generator", {"ellipsoid", "cylinder"}};
 const Condition kVolume{"surface", {"false"}};
 const Condition kDisplacement{"type", {"displacement"}};
+const Condition kRigid{"type", {"rigid"}};
+const Condition kActive{"type", {"active"}};
 
 const std::vector<Section>& sections() {
   static const std::vector<Section> table{
@@ -44,6 +46,21 @@ const std::vector<Section>& sections() {
       {"sphere", "nodes.sphere", "Nodes inside a sphere."},
       {"half_space", "nodes.half_space", "Nodes x with (x - point) . normal >= 0."},
       {"output", "output", "What is written while the simulation runs."},
+      {"motion", "objects[].motion",
+       "A rigid object with `motion` is driven (an instrument, a held bone): its centre of mass "
+       "follows `translation` and it turns by `rotation` about its rest centre of mass. "
+       "`motion: {}` holds it in place. Without `motion` it moves freely under its loads."},
+      {"fibres", "objects[].fibres",
+       "Contractile fibres of an active object (muscle): the lines of its nodes along "
+       "`direction`; each segment is a tension-only spring of rest length l0 (1 - a(t) "
+       "max_contraction). The passive shape memory stays."},
+      {"activation", "objects[].fibres.activation[]",
+       "Each event of the activation a(t): linear between events, held after the last."},
+      {"link", "stitches[], doubled[]",
+       "Each entry of `stitches` merges coincident nodes of two objects into shared border "
+       "nodes (paper, Fig. 1a); each entry of `doubled` keeps coincident nodes as two nodes held "
+       "at one position and velocity (Fig. 1b). A node of `nodes` (of `object`) is paired with "
+       "the nearest node of `with_nodes` (of `with`) within `tolerance`."},
   };
   return table;
 }
@@ -75,6 +92,18 @@ std::vector<Parameter> scene_parameters() {
        .default_note = "none",
        .child = "constraint",
        .doc = "Fixed and prescribed-displacement nodes."},
+      {.section = "scene",
+       .name = "stitches",
+       .kind = Kind::list,
+       .default_note = "none",
+       .child = "link",
+       .doc = "Objects sharing border nodes (merged coincident nodes)."},
+      {.section = "scene",
+       .name = "doubled",
+       .kind = Kind::list,
+       .default_note = "none",
+       .child = "link",
+       .doc = "Doubled nodes: pairs of coincident nodes held together."},
       {.section = "scene",
        .name = "output",
        .kind = Kind::map,
@@ -167,6 +196,13 @@ std::vector<Parameter> object_parameters() {
        .required = true,
        .doc = "Unique name (letters, digits, `_`, `-`); loads and constraints refer to it."},
       {.section = "object",
+       .name = "type",
+       .kind = Kind::choice,
+       .choices = {"elastic", "rigid", "active"},
+       .default_value = "elastic",
+       .doc = "`elastic`: shape memory; `rigid`: one rigid body (bone, instrument); `active`: "
+              "elastic with contractile fibres (muscle)."},
+      {.section = "object",
        .name = "mesh",
        .kind = Kind::map,
        .required = true,
@@ -182,7 +218,21 @@ std::vector<Parameter> object_parameters() {
        .name = "volume_constraint",
        .kind = Kind::boolean,
        .default_value = "false",
-       .doc = "Keep the volume enclosed by the boundary surface."},
+       .doc = "Keep the volume enclosed by the boundary surface (elastic and active objects)."},
+      {.section = "object",
+       .name = "motion",
+       .kind = Kind::map,
+       .default_note = "free",
+       .when = {kRigid},
+       .child = "motion",
+       .doc = "Drives a rigid object."},
+      {.section = "object",
+       .name = "fibres",
+       .kind = Kind::map,
+       .required = true,
+       .when = {kActive},
+       .child = "fibres",
+       .doc = "The contractile fibres of an active object."},
   };
 }
 
@@ -311,7 +361,7 @@ std::vector<Parameter> material_parameters() {
        .kind = Kind::quantity,
        .dimension = Dimension::stiffness,
        .range = gt(0),
-       .required = true,
+       .default_note = "required for elastic and active objects",
        .doc = "Shape-memory spring of each node."},
       {.section = "material",
        .name = "density",
@@ -492,6 +542,88 @@ std::vector<Parameter> selector_parameters() {
   };
 }
 
+std::vector<Parameter> component_parameters() {
+  return {
+      {.section = "motion",
+       .name = "translation",
+       .kind = Kind::schedule,
+       .dimension = Dimension::length,
+       .default_note = "none",
+       .doc = "Displacement of the centre of mass over time."},
+      {.section = "motion",
+       .name = "rotation",
+       .kind = Kind::schedule,
+       .default_note = "none",
+       .doc = "Rotation vector (axis times angle, rad) over time, about the rest centre of "
+              "mass."},
+      {.section = "fibres",
+       .name = "direction",
+       .kind = Kind::vector,
+       .required = true,
+       .doc = "Direction of the fibres; any non-zero length."},
+      {.section = "fibres",
+       .name = "max_contraction",
+       .kind = Kind::quantity,
+       .range = {0.0, 1.0, true, true},
+       .required = true,
+       .doc = "Relative shortening of the fibre rest length at full activation."},
+      {.section = "fibres",
+       .name = "stiffness",
+       .kind = Kind::quantity,
+       .dimension = Dimension::stiffness,
+       .range = gt(0),
+       .default_note = "the material's stiffness",
+       .doc = "Spring of each fibre segment."},
+      {.section = "fibres",
+       .name = "activation",
+       .kind = Kind::list,
+       .range = ge(1),
+       .required = true,
+       .child = "activation",
+       .doc = "The activation over time: a list of {t, a} events."},
+      {.section = "activation",
+       .name = "t",
+       .kind = Kind::quantity,
+       .dimension = Dimension::time,
+       .range = ge(0),
+       .required = true,
+       .doc = "Event time; strictly increasing."},
+      {.section = "activation",
+       .name = "a",
+       .kind = Kind::quantity,
+       .range = closed(0, 1),
+       .required = true,
+       .doc = "Activation at t."},
+      {.section = "link",
+       .name = "object",
+       .kind = Kind::name,
+       .required = true,
+       .doc = "The first object."},
+      {.section = "link",
+       .name = "with",
+       .kind = Kind::name,
+       .required = true,
+       .doc = "The second object."},
+      {.section = "link",
+       .name = "nodes",
+       .kind = Kind::selector,
+       .default_note = "all nodes",
+       .doc = "Nodes of `object` to pair; when given, each must find a partner."},
+      {.section = "link",
+       .name = "with_nodes",
+       .kind = Kind::selector,
+       .default_note = "all nodes",
+       .doc = "Nodes of `with` they may pair with."},
+      {.section = "link",
+       .name = "tolerance",
+       .kind = Kind::quantity,
+       .dimension = Dimension::length,
+       .range = gt(0),
+       .default_value = "1e-6",
+       .doc = "Largest rest distance between paired nodes."},
+  };
+}
+
 std::vector<Parameter> output_parameters() {
   return {
       {.section = "output",
@@ -515,7 +647,7 @@ const std::vector<Parameter>& parameters() {
     for (auto part :
          {scene_parameters(), simulation_parameters(), object_parameters(), mesh_parameters(),
           material_parameters(), load_parameters(), constraint_parameters(), schedule_parameters(),
-          selector_parameters(), output_parameters()})
+          selector_parameters(), output_parameters(), component_parameters()})
       all.insert(all.end(), part.begin(), part.end());
     return all;
   }();

@@ -37,6 +37,8 @@ ResultWriter::ResultWriter(std::filesystem::path dir, std::string stem, const Mo
   if (!monitors_) throw std::runtime_error(fmt::format("cannot write {}", path.string()));
   std::string header = "time_s,kinetic_energy_J,shape_memory_energy_J,max_residual_force_N";
   for (int c : closed_components_) header += ",volume_" + model.components[c].name + "_m3";
+  for (const RigidBody& b : model.rigid_bodies)  // how far each rigid body has moved
+    header += ",displacement_" + model.components[b.component].name + "_m";
   write_monitors(header + '\n');
   const size_t n = model.rest_position.size() * 3;
   displacement_.resize(n);
@@ -68,6 +70,9 @@ void ResultWriter::monitor(Simulator& sim) {
   std::string row = fmt::format("{},{},{},{}", sim.state().time, sim.kinetic_energy(),
                                 sim.state().shape_memory_energy, sim.max_residual_force());
   for (int c : closed_components_) row += fmt::format(",{}", volumes[c]);
+  for (size_t b = 0; b < sim.model().rigid_bodies.size(); ++b)
+    row += fmt::format(
+        ",{}", (sim.state().bodies[b].center - sim.model().rigid_bodies[b].rest_center).norm());
   write_monitors(row + '\n');
   monitored_time_ = sim.state().time;
 }

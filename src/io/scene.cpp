@@ -191,6 +191,10 @@ class SceneBuilder {
   MaterialSpec material(SectionReader& reader);
   LoadSpec load(SectionReader& reader);
   ConstraintSpec constraint(SectionReader& reader);
+  LinkSpec link(SectionReader& reader);
+  void object_kind(SectionReader& reader, ObjectSpec& spec,
+                   const std::optional<SourceLoc>& stiffness_at);
+  FibreSpec fibres(SectionReader& reader);
   OutputSpec output(SectionReader& reader);
   void refer(SectionReader& reader, std::string& object);
   void check_names();
@@ -211,6 +215,8 @@ Scene SceneBuilder::build(const YAML::Node& root, const std::string& file) {
   objects_ = scene.objects.size();
   top.items("loads", [&](SectionReader& r) { scene.loads.push_back(load(r)); });
   top.items("constraints", [&](SectionReader& r) { scene.constraints.push_back(constraint(r)); });
+  top.items("stitches", [&](SectionReader& r) { scene.stitches.push_back(link(r)); });
+  top.items("doubled", [&](SectionReader& r) { scene.doubled.push_back(link(r)); });
   if (auto reader = top.map("output")) scene.output = output(*reader);
   top.done();
   check_names();
@@ -244,8 +250,93 @@ ObjectSpec SceneBuilder::object(SectionReader& reader) {
   if (reader.read("name", spec.name))
     names_.push_back({spec.name, *reader.value_loc("name"), reader.where()});
   if (auto mesh_reader = reader.map("mesh")) spec.mesh = mesh(*mesh_reader);
-  if (auto material_reader = reader.map("material")) spec.material = material(*material_reader);
+  std::optional<SourceLoc> stiffness_at;
+  if (auto material_reader = reader.map("material")) {
+    spec.material = material(*material_reader);
+    stiffness_at = material_reader->value_loc("stiffness");
+  }
   reader.read("volume_constraint", spec.volume_constraint);
+  object_kind(reader, spec, stiffness_at);
+  reader.done();
+  return spec;
+}
+
+// What the object's type adds (motion, fibres) and the fields it refuses or needs.
+void SceneBuilder::object_kind(SectionReader& reader, ObjectSpec& spec,
+                               const std::optional<SourceLoc>& stiffness_at) {
+  const bool has_type = reader.read("type", spec.type,
+                                    {{"elastic", ObjectType::elastic},
+                                     {"rigid", ObjectType::rigid},
+                                     {"active", ObjectType::active}});
+  const bool has_motion = reader.value_loc("motion").has_value();
+  if (auto motion = reader.map("motion"); motion && has_motion) {
+    MotionSpec m;
+    m.loc = motion->loc();
+    motion->read("translation", m.translation);
+    motion->read("rotation", m.rotation);
+    motion->done();
+    spec.motion = std::move(m);
+  }
+  if (auto fibre_reader = reader.map("fibres")) spec.fibres = fibres(*fibre_reader);
+  if (!has_type) return;
+  const SourceLoc material_at = spec.material.loc;
+  if (spec.type == ObjectType::rigid) {
+    if (stiffness_at)
+      context_.error(*stiffness_at,
+                     "'stiffness' applies only to elastic and active objects "
+                     "(this object is rigid)");
+    if (spec.volume_constraint)
+      context_.error(reader.value_loc("volume_constraint").value_or(reader.loc()),
+                     "'volume_constraint' applies only to elastic and active objects (this "
+                     "object is rigid)");
+  } else if (!stiffness_at && reader.value_loc("material") && material_at.line > 0) {
+    context_.error(material_at, "'stiffness' is required in 'material'");
+  }
+}
+
+FibreSpec SceneBuilder::fibres(SectionReader& reader) {
+  FibreSpec spec;
+  spec.loc = reader.loc();
+  if (reader.read("direction", spec.direction) && spec.direction.cwiseAbs().maxCoeff() == 0.0)
+    context_.error(reader.value_loc("direction").value_or(reader.loc()),
+                   "'direction' must be a non-zero vector (got [0, 0, 0])");
+  reader.read("max_contraction", spec.max_contraction);
+  reader.read("stiffness", spec.stiffness);
+  Schedule activation;
+  bool ok = true;
+  reader.items("activation", [&](SectionReader& event) {
+    double t = 0.0, a = 0.0;
+    const bool has_t = event.read("t", t), has_a = event.read("a", a);
+    event.done();
+    if (!has_t || !has_a) {
+      ok = false;
+      return;
+    }
+    if (!activation.times.empty() && t <= activation.times.back()) {
+      context_.error(event.value_loc("t").value_or(event.loc()),
+                     fmt::format("activation times must be strictly increasing: {} has t = {} s "
+                                 "after t = {} s",
+                                 event.where(), t, activation.times.back()));
+      ok = false;
+      return;
+    }
+    activation.times.push_back(t);
+    activation.values.push_back(Eigen::Vector3d(a, 0.0, 0.0));
+  });
+  if (ok) spec.activation = std::move(activation);
+  reader.done();
+  return spec;
+}
+
+LinkSpec SceneBuilder::link(SectionReader& reader) {
+  LinkSpec spec;
+  spec.loc = reader.loc();
+  refer(reader, spec.object);
+  if (reader.read("with", spec.with))
+    references_.push_back({spec.with, *reader.value_loc("with"), reader.where()});
+  reader.read("nodes", spec.nodes);
+  reader.read("with_nodes", spec.with_nodes);
+  reader.read("tolerance", spec.tolerance);
   reader.done();
   return spec;
 }

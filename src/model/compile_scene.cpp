@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <limits>
 #include <optional>
 
 #include "io/mesh_file.hpp"
@@ -53,7 +54,14 @@ struct Compiler {
     if (!o.mesh.file.empty() && !(from_file = read_file(o))) return;
     try {
       const Mesh mesh = from_file ? std::move(*from_file) : generate(o.mesh);
+      if (o.type == ObjectType::rigid) {
+        const MotionSpec motion = o.motion.value_or(MotionSpec{});
+        add_rigid_component(model, o.name, mesh, o.material, o.motion.has_value(),
+                            motion.translation, motion.rotation);
+        return;
+      }
       const int c = add_elastic_component(model, o.name, mesh, o.material);
+      if (o.type == ObjectType::active) model.components[c].kind = ComponentKind::active;
       if (o.volume_constraint) add_volume_constraint(model, c);
     } catch (const std::exception& e) {
       const std::string what = e.what();
@@ -107,15 +115,15 @@ struct Compiler {
       nodes = it->second;
     } else if (s.kind == NodeSelector::Kind::indices) {
       for (int i : s.indices) {
-        if (i >= c->node_count) {
+        if (i >= int(c->nodes.size())) {
           fail(s.loc, fmt::format("node index {} is out of range: object '{}' has nodes 0-{}", i,
-                                  object, c->node_count - 1));
+                                  object, c->nodes.size() - 1));
           return {};
         }
-        nodes.push_back(c->first_node + i);
+        nodes.push_back(c->nodes[i]);
       }
     } else {
-      for (int i = c->first_node; i < c->first_node + c->node_count; ++i)
+      for (int i : c->nodes)
         if (inside(s, model.rest_position[i])) nodes.push_back(i);
     }
     std::sort(nodes.begin(), nodes.end());
@@ -128,18 +136,108 @@ struct Compiler {
 
 }  // namespace
 
+namespace {
+
+// The node pairs of a stitch or doubling: each node of `nodes` with its nearest node of
+// `with_nodes` within the tolerance. Explicit `nodes` must all find a partner.
+std::vector<std::array<int, 2>> link_pairs(Compiler& k, const LinkSpec& l) {
+  const std::vector<int> from = k.select(l.object, l.nodes);
+  const std::vector<int> to = k.select(l.with, l.with_nodes);
+  if (from.empty() || to.empty()) return {};
+  if (l.object == l.with) {
+    k.fail(l.loc,
+           fmt::format("'object' and 'with' are both '{}': link two different objects", l.object));
+    return {};
+  }
+  std::vector<std::array<int, 2>> pairs = coincident_pairs(k.model, from, to, l.tolerance);
+  const auto nearest = [&](int i) {
+    double d = std::numeric_limits<double>::infinity();
+    for (int j : to) d = std::min(d, (k.model.rest_position[j] - k.model.rest_position[i]).norm());
+    return d;
+  };
+  if (l.nodes.kind != NodeSelector::Kind::all && pairs.size() < from.size()) {
+    for (int i : from)
+      if (std::none_of(pairs.begin(), pairs.end(), [&](const auto& p) { return p[0] == i; })) {
+        const Component* c = k.find(l.object, l.loc);
+        const auto local = std::find(c->nodes.begin(), c->nodes.end(), i) - c->nodes.begin();
+        k.fail(l.nodes.loc,
+               fmt::format("node {} of '{}' has no node of '{}' within the tolerance {:g} m "
+                           "(the nearest is {:.3g} m away)",
+                           local, l.object, l.with, l.tolerance, nearest(i)));
+        return {};
+      }
+  }
+  if (pairs.empty()) {
+    double closest = std::numeric_limits<double>::infinity();
+    for (int i : from) closest = std::min(closest, nearest(i));
+    k.fail(l.loc, fmt::format("no node of '{}' lies within the tolerance {:g} m of a node of '{}' "
+                              "(the closest pair is {:.3g} m apart)",
+                              l.object, l.tolerance, l.with, closest));
+  }
+  return pairs;
+}
+
+bool is_rigid(const Model& model, const std::string& object) {
+  for (const Component& c : model.components)
+    if (c.name == object) return c.kind == ComponentKind::rigid;
+  return false;
+}
+
+void add_links(Compiler& k, const Scene& scene) {
+  std::vector<std::array<int, 2>> stitched;
+  for (const LinkSpec& l : scene.stitches) {
+    if (is_rigid(k.model, l.object) && is_rigid(k.model, l.with)) {
+      k.fail(l.loc, fmt::format("a stitch cannot join two rigid objects ('{}' and '{}'): link "
+                                "them by an elastic one (a ligament)",
+                                l.object, l.with));
+      continue;
+    }
+    const auto pairs = link_pairs(k, l);
+    stitched.insert(stitched.end(), pairs.begin(), pairs.end());
+  }
+  if (!k.problems.empty()) return;
+  try {
+    stitch_nodes(k.model, stitched);
+  } catch (const std::exception& e) {
+    k.fail(scene.stitches.front().loc, e.what());
+  }
+}
+
+void add_fibres_of(Compiler& k, const Scene& scene) {
+  for (size_t c = 0; c < scene.objects.size(); ++c) {
+    const ObjectSpec& o = scene.objects[c];
+    if (o.type != ObjectType::active) continue;
+    try {
+      add_fibres(k.model, int(c), o.fibres.direction,
+                 o.fibres.stiffness.value_or(o.material.stiffness), o.fibres.max_contraction,
+                 o.fibres.activation);
+    } catch (const std::exception& e) {
+      k.fail(o.fibres.loc, e.what());
+    }
+  }
+}
+
+}  // namespace
+
 Model compile_scene(const Scene& scene) {
   Compiler k{scene, {}, {}};
   k.model.settings = scene.simulation;
   k.model.gravity = scene.simulation.gravity;
   k.model.damping = scene.simulation.damping;
   for (const ObjectSpec& o : scene.objects) k.add_object(o);
+  if (k.problems.empty()) add_links(k, scene);
   if (k.problems.empty()) {
     for (const LoadSpec& l : scene.loads) {
       std::vector<int> nodes = k.select(l.object, l.nodes);
       if (!nodes.empty()) add_applied_force(k.model, {std::move(nodes), l.force});
     }
     for (const ConstraintSpec& c : scene.constraints) {
+      if (is_rigid(k.model, c.object)) {
+        k.fail(c.loc, fmt::format("object '{}' is rigid: hold or move it as a whole with its "
+                                  "'motion' (motion: {{}} holds it in place)",
+                                  c.object));
+        continue;
+      }
       std::vector<int> nodes = k.select(c.object, c.nodes);
       if (nodes.empty()) continue;
       if (c.kind == ConstraintSpec::Kind::fixed)
@@ -147,6 +245,17 @@ Model compile_scene(const Scene& scene) {
       else
         add_prescribed_displacement(k.model, {std::move(nodes), c.axes, c.displacement});
     }
+    for (const LinkSpec& l : scene.doubled) {
+      if (is_rigid(k.model, l.object) && is_rigid(k.model, l.with)) {
+        k.fail(l.loc, fmt::format("doubled nodes cannot join two rigid objects ('{}' and '{}'): "
+                                  "link them by an elastic one (a ligament)",
+                                  l.object, l.with));
+        continue;
+      }
+      const auto pairs = link_pairs(k, l);
+      if (!pairs.empty()) add_doubled_nodes(k.model, pairs);
+    }
+    add_fibres_of(k, scene);
   }
   if (!k.problems.empty()) throw SceneError(std::move(k.problems));
   try {

@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "constraints/doubled.hpp"
 #include "forces/shape_memory.hpp"
+#include "solver/rigid.hpp"
 
 namespace phymul {
 namespace {
@@ -38,28 +40,24 @@ std::vector<double> node_masses(const std::string& name, const Mesh& mesh,
   return share;
 }
 
-}  // namespace
-
-int add_elastic_component(Model& model, const std::string& name, const Mesh& mesh,
-                          const MaterialSpec& material) {
-  validate(mesh);
-  if (!(material.stiffness > 0.0))
-    throw std::invalid_argument(
-        fmt::format("object '{}': 'stiffness' must be > 0 N/m (got {})", name, material.stiffness));
+// Nodes, masses, cells, boundary and node sets of a component's mesh, appended to the model.
+int add_mesh(Model& model, const std::string& name, const Mesh& mesh,
+             const MaterialSpec& material) {
+  const int first_node = model.node_count();
   Component c;
   c.name = name;
-  c.first_node = model.node_count();
-  c.node_count = int(mesh.points.size());
+  c.nodes.resize(mesh.points.size());
+  for (size_t i = 0; i < mesh.points.size(); ++i) c.nodes[i] = first_node + int(i);
   c.first_cell = int(model.cells.size());
   c.cell_count = int(mesh.cells.size());
   c.volumetric = mesh.volumetric();
   const std::vector<Triangle> boundary = boundary_triangles(mesh);
   if (is_closed(boundary))
     for (const Triangle& t : boundary)
-      c.boundary.push_back({t[0] + c.first_node, t[1] + c.first_node, t[2] + c.first_node});
+      c.boundary.push_back({t[0] + first_node, t[1] + first_node, t[2] + first_node});
   for (const auto& [set, ids] : mesh.node_sets) {
     auto& global = c.node_sets[set];
-    for (int i : ids) global.push_back(i + c.first_node);
+    for (int i : ids) global.push_back(i + first_node);
   }
 
   const std::vector<double> masses = node_masses(name, mesh, material);
@@ -69,13 +67,41 @@ int add_elastic_component(Model& model, const std::string& name, const Mesh& mes
   }
   const int component = int(model.components.size());
   for (Cell cell : mesh.cells) {
-    for (int k = 0; k < node_count(cell.type); ++k) cell.nodes[k] += c.first_node;
+    for (int k = 0; k < node_count(cell.type); ++k) cell.nodes[k] += first_node;
     model.cells.push_back(cell);
     model.cell_component.push_back(component);
   }
-  model.shape_memory.push_back(
-      build_shape_memory(name, mesh, c.first_node, material, model.rest_position));
   model.components.push_back(std::move(c));
+  return component;
+}
+
+}  // namespace
+
+int add_elastic_component(Model& model, const std::string& name, const Mesh& mesh,
+                          const MaterialSpec& material) {
+  validate(mesh);
+  if (!(material.stiffness > 0.0))
+    throw std::invalid_argument(
+        fmt::format("object '{}': 'stiffness' must be > 0 N/m (got {})", name, material.stiffness));
+  const int first_node = model.node_count();
+  const int component = add_mesh(model, name, mesh, material);
+  model.shape_memory.push_back(
+      build_shape_memory(name, mesh, first_node, material, model.rest_position));
+  return component;
+}
+
+int add_rigid_component(Model& model, const std::string& name, const Mesh& mesh,
+                        const MaterialSpec& material, bool driven, Schedule translation,
+                        Schedule rotation) {
+  validate(mesh);
+  const int component = add_mesh(model, name, mesh, material);
+  model.components[component].kind = ComponentKind::rigid;
+  RigidBody body;
+  body.component = component;
+  body.driven = driven;
+  body.translation = std::move(translation);
+  body.rotation = std::move(rotation);
+  model.rigid_bodies.push_back(std::move(body));
   return component;
 }
 
@@ -152,6 +178,9 @@ void finalize(Model& model) {
     for (int i : p.nodes)
       for (int a = 0; a < 3; ++a)
         if (p.axes[a]) model.inverse_mass[i][a] = 0.0;
+  // Rigid bodies first: a doubled group touching one moves with it.
+  finalize_rigid_bodies(model);
+  finalize_doubled(model);
 }
 
 State make_state(const Model& model) {
@@ -162,6 +191,7 @@ State make_state(const Model& model) {
   size_t memory_nodes = 0;
   for (const ShapeMemory& m : model.shape_memory) memory_nodes += m.nodes.size();
   s.rotation.assign(memory_nodes, Eigen::Quaterniond::Identity());
+  init_rigid_states(model, s);
   return s;
 }
 

@@ -22,14 +22,13 @@ std::vector<double> runaway_edges(const Model& model) {
 std::optional<Runaway> find_runaway(const Model& model, std::span<const double> edges,
                                     std::span<const Vec3> before, std::span<const Vec3> after) {
   for (const Component& c : model.components) {
-    const int end = c.first_node + c.node_count;
     Vec3 mean = Vec3::Zero();
     int counted = 0;
-    for (int i = c.first_node; i < end; ++i)
+    for (int i : c.nodes)
       if (std::isfinite(edges[i])) mean += after[i] - before[i], ++counted;
     if (counted == 0) continue;
     mean /= double(counted);
-    for (int i = c.first_node; i < end; ++i) {
+    for (int i : c.nodes) {
       const double moved = (after[i] - before[i] - mean).norm();
       if (moved > kRunawayFraction * edges[i]) return Runaway{i, moved, edges[i]};
     }

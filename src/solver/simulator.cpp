@@ -2,11 +2,14 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "constraints/constraints.hpp"
 #include "constraints/contact.hpp"
+#include "constraints/doubled.hpp"
 #include "forces/forces.hpp"
+#include "solver/rigid.hpp"
 #include "solver/runaway_guard.hpp"
 
 namespace phymul {
@@ -25,8 +28,8 @@ double bounding_diagonal(const std::vector<Vec3>& p) {
 
 int component_of(const Model& model, int node) {
   for (int c = 0; c < int(model.components.size()); ++c) {
-    const Component& k = model.components[c];
-    if (node >= k.first_node && node < k.first_node + k.node_count) return c;
+    const std::vector<int>& nodes = model.components[c].nodes;
+    if (std::find(nodes.begin(), nodes.end(), node) != nodes.end()) return c;
   }
   return -1;
 }
@@ -36,6 +39,7 @@ int component_of(const Model& model, int node) {
 Simulator::Simulator(Model model) : model_(std::move(model)) {
   if (model_.inverse_mass.size() != model_.rest_position.size()) finalize(model_);
   state_ = make_state(model_);
+  drift_rigid_bodies(model_, state_, 0.0, 0.0);  // driven bodies at their t = 0 pose
   const size_t n = model_.rest_position.size();
   x_start_.assign(n, Vec3::Zero());
   v_start_.assign(n, Vec3::Zero());
@@ -86,11 +90,13 @@ void Simulator::step_verlet(double h, double load_time) {
   State& s = state_;
   std::vector<Vec3>& a = f_start_;  // accelerations, tangent to the volume constraints
   accelerations(a);
+  kick_rigid_bodies(model_, s, h);
   for (int i = 0; i < model_.node_count(); ++i) {
     x_start_[i] = s.x[i];
     v_start_[i] = s.v[i];  // the last good state, if the step fails its checks
     s.x[i] += h * (s.v[i] + 0.5 * h * a[i]);
   }
+  drift_rigid_bodies(model_, s, h, load_time);
   apply_position_constraints(model_, s.x, load_time, scratch_);
   for (int i = 0; i < model_.node_count(); ++i) s.v[i] = (s.x[i] - x_start_[i]) / h;
   compute_forces(model_, s, load_time);
@@ -99,6 +105,8 @@ void Simulator::step_verlet(double h, double load_time) {
   accelerations(a, /*tangent=*/false);
   for (int i = 0; i < model_.node_count(); ++i) s.v[i] += 0.5 * h * a[i];
   project_volume_velocities(model_, s.x, s.v, scratch_);
+  project_doubled(model_, s.v);
+  kick_rigid_bodies(model_, s, h);
 }
 
 // Without their part along the volume gradients (the pressure the projection would undo
@@ -110,6 +118,7 @@ void Simulator::accelerations(std::vector<Vec3>& a, bool tangent) {
     a[i] = model_.inverse_mass[i].cwiseProduct(state_.f[i]) -
            c * state_.v[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
   if (tangent) project_volume_velocities(model_, state_.x, a, scratch_);
+  project_doubled(model_, a);
 }
 
 // The paper's Newton-Cotes family: an Euler predictor, then the trapezoid rule on the
@@ -119,12 +128,16 @@ void Simulator::step_newton_cotes(double h, double load_time) {
   const int n = model_.node_count();
   std::vector<Vec3>& a0 = f_start_;
   accelerations(a0);
+  // Rigid bodies take the velocity Verlet splitting whatever the scheme: kick, drift here,
+  // the second kick at the end with the forces at the new positions.
+  kick_rigid_bodies(model_, s, h);
   for (int i = 0; i < n; ++i) {
     x_start_[i] = s.x[i];
     v_start_[i] = s.v[i];
     s.x[i] += h * s.v[i];
     s.v[i] += h * a0[i];
   }
+  drift_rigid_bodies(model_, s, h, load_time);
   apply_prescribed(model_, s.x, load_time);
   compute_forces(model_, s, load_time);
   accelerations(a1_);
@@ -133,10 +146,13 @@ void Simulator::step_newton_cotes(double h, double load_time) {
     s.x[i] = x_start_[i] + 0.5 * h * (v_start_[i] + s.v[i]);
     a1_[i] = s.x[i];  // spent: keep the unconstrained position instead
   }
+  place_rigid_nodes(model_, s);
   apply_position_constraints(model_, s.x, load_time, scratch_);
   for (int i = 0; i < n; ++i) s.v[i] += (s.x[i] - a1_[i]) / h;
   project_volume_velocities(model_, s.x, s.v, scratch_);
+  project_doubled(model_, s.v);
   compute_forces(model_, s, load_time);
+  kick_rigid_bodies(model_, s, h);
   load_time_ = load_time;
 }
 
@@ -182,6 +198,7 @@ double Simulator::max_residual_force() {
   std::vector<Vec3>& r = f_start_;
   for (int i = 0; i < model_.node_count(); ++i)
     r[i] = state_.f[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
+  gather_doubled(model_, r);
   for (const VolumeConstraint& c : model_.volumes) {
     volume_gradient(c, state_.x, scratch_);
     double rg = 0.0, gg = 0.0;
@@ -197,7 +214,7 @@ double Simulator::max_residual_force() {
   remove_contact_forces(r);
   double largest = 0.0;
   for (int i = 0; i < model_.node_count(); ++i) largest = std::max(largest, r[i].norm());
-  return largest;
+  return std::max(largest, rigid_residual(model_, state_));
 }
 
 // A node touching an obstacle can be pushed into it with any force: that part of its
@@ -239,6 +256,10 @@ std::vector<Vec3> Simulator::support_reactions() const {
     const Vec3 held = Vec3::Ones() - free_axes(model_.inverse_mass[i]);
     reaction[i] = -reaction[i].cwiseProduct(held);
   }
+  // A free rigid body is held by nothing: its nodes' forces move it.
+  for (const RigidBody& body : model_.rigid_bodies)
+    if (!body.driven)
+      for (int i : body.nodes) reaction[i].setZero();
   return reaction;
 }
 
@@ -253,6 +274,7 @@ StaticResult Simulator::relax(double load_time, long max_iterations,
                               const std::function<void(long, double)>& progress) {
   static_progress_.step_iterations = 0;
   static_progress_.previous_kinetic = 0.0;
+  drift_rigid_bodies(model_, state_, 0.0, load_time);  // driven bodies at their new pose
   apply_position_constraints(model_, state_.x, load_time, scratch_);
   compute_forces(model_, state_, load_time);
   load_time_ = load_time;
@@ -283,6 +305,7 @@ StaticResult Simulator::continue_relax(double load_time, long max_iterations,
       const double kinetic = kinetic_energy();
       if (kinetic < p.previous_kinetic) {
         for (Vec3& v : state_.v) v.setZero();
+        stop_rigid_bodies(state_);
         p.previous_kinetic = 0.0;
       } else {
         p.previous_kinetic = kinetic;
@@ -331,10 +354,13 @@ StaticResult Simulator::static_load_steps(const std::function<void(long, double)
 
 void Simulator::restore(State state, double load_time, const StaticProgress& progress) {
   if (state.x.size() != state_.x.size() || state.v.size() != state_.v.size() ||
-      state.f.size() != state_.f.size() || state.rotation.size() != state_.rotation.size())
+      state.f.size() != state_.f.size() || state.rotation.size() != state_.rotation.size() ||
+      state.bodies.size() != state_.bodies.size())
     throw std::invalid_argument(fmt::format(
-        "restore: the state has {} nodes and {} rotations, the model {} and {}", state.x.size(),
-        state.rotation.size(), state_.x.size(), state_.rotation.size()));
+        "restore: the state has {} nodes, {} rotations and {} rigid bodies, the model {}, {} "
+        "and {}",
+        state.x.size(), state.rotation.size(), state.bodies.size(), state_.x.size(),
+        state_.rotation.size(), state_.bodies.size()));
   state_ = std::move(state);
   load_time_ = load_time;
   static_progress_ = progress;

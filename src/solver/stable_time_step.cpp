@@ -19,6 +19,15 @@ double stable_time_step(const Model& model) {
       for (int j : nb) row[j] += 2.0 * m.stiffness / double(nb.size());
     }
   }
+  // A fibre segment is a spring between two nodes: K on each and K across.
+  for (const FibreBundle& fibres : model.fibres)
+    for (int p = 0; p < fibres.polylines.rows(); ++p) {
+      const auto line = fibres.polylines.row(p);
+      for (size_t k = 0; k + 1 < line.size(); ++k) {
+        row[line[k]] += 2.0 * fibres.stiffness;
+        row[line[k + 1]] += 2.0 * fibres.stiffness;
+      }
+    }
   double omega2 = 0.0;
   for (int i = 0; i < model.node_count(); ++i) omega2 = std::max(omega2, row[i] / model.mass[i]);
   if (omega2 == 0.0) return std::numeric_limits<double>::infinity();

@@ -83,3 +83,35 @@ TEST(RunOutput, SeriesMonitorsAndReportReadBack) {
 
 }  // namespace
 }  // namespace phymul
+
+namespace phymul {
+namespace {
+
+// A falling bone: monitors.csv has the distance its centre of mass moved, g t^2 / 2.
+TEST(RunOutput, MonitorsTrackRigidBodies) {
+  testing::TempDir dir;
+  const auto scene = dir.path() / "bone.yaml";
+  std::ofstream(scene) << R"(simulation: {dt: 1 ms, duration: 0.1 s, gravity: [0, 0, -9.81]}
+objects:
+  - name: bone
+    type: rigid
+    mesh: {generator: box, size: [2 cm, 2 cm, 2 cm], cells: [1, 1, 1]}
+    material: {density: 1900 kg/m^3}
+)";
+  const auto out = dir.path() / "out";
+  const auto run = testing::run_command(testing::cli() + " run " + scene.string() + " -o " +
+                                        out.string() + " --quiet");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  std::ifstream in(out / "monitors.csv");
+  std::string header, line, last;
+  std::getline(in, header);
+  while (std::getline(in, line)) last = line;
+  EXPECT_TRUE(header.ends_with(",volume_bone_m3,displacement_bone_m")) << header;
+  const double moved = std::stod(last.substr(last.rfind(',') + 1));
+  const double t = std::stod(last.substr(0, last.find(',')));
+  EXPECT_NEAR(t, 0.1, 1e-9);
+  EXPECT_NEAR(moved, 0.5 * 9.81 * t * t, 1e-9);
+}
+
+}  // namespace
+}  // namespace phymul

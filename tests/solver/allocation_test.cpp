@@ -3,6 +3,7 @@
 
 #include <atomic>
 #include <cstdlib>
+#include <filesystem>
 #include <new>
 
 #include "phymul/simulator.hpp"
@@ -58,6 +59,28 @@ TEST(Simulator, StepsDoNotAllocate) {
     counting = false;
     EXPECT_EQ(allocations.load(), 0);
     EXPECT_GT(residual, 0.0);
+  }
+}
+
+// Rigid bodies, doubled nodes, stitched nodes and fibres: the organ examples step without
+// allocating too.
+TEST(Simulator, OrganExampleStepsDoNotAllocate) {
+  if (!PHYMUL_COUNT_ALLOCATIONS) GTEST_SKIP() << "allocations are counted in the normal build only";
+  const std::filesystem::path examples = std::filesystem::path(PHYMUL_SOURCE_DIR) / "examples";
+  for (const char* name : {"muscle.yaml", "fig1c_ligament.yaml", "fig1b_doubled_nodes.yaml"}) {
+    for (Integrator integrator : {Integrator::verlet, Integrator::newton_cotes}) {
+      Model model = compile_scene(load_scene(examples / name));
+      model.settings.integrator = integrator;
+      Simulator sim(model);
+      sim.step();
+      allocations = 0;
+      counting = true;
+      for (int k = 0; k < 50; ++k) sim.step();
+      const double residual = sim.max_residual_force();
+      counting = false;
+      EXPECT_EQ(allocations.load(), 0) << name;
+      EXPECT_GT(residual, 0.0);
+    }
   }
 }
 
