@@ -39,6 +39,10 @@ struct VolumeConstraint {
   std::vector<Triangle> triangles;  // global node ids
   std::vector<int> nodes;           // the surface's nodes, sorted
   double target_volume = 0.0;       // m^3
+  Schedule target_schedule;         // m^3 in x over time; empty: target_volume throughout
+  double target_at(double load_time) const {
+    return target_schedule.empty() ? target_volume : target_schedule.at(load_time).x();
+  }
 };
 
 struct AppliedForce {
@@ -69,6 +73,7 @@ struct RigidObstacle {
   // to point + length * axis (both ends rounded); rounded_cylinder: an endorectal probe, a
   // capsule whose base end extends to infinity backwards (open there, rounded at the tip).
   enum class Shape { plane, sphere, capsule, rounded_cylinder };
+  std::string name;  // names its monitors columns; "" = obstacle<index>
   Shape shape = Shape::plane;
   Vec3 point = Vec3::Zero();  // m, at load time 0
   Vec3 axis = Vec3::UnitZ();  // normalised by add_rigid_obstacle
@@ -104,8 +109,9 @@ struct Model {
   // Per node and axis: 1/m where the node is free to move along that axis, 0 where a
   // position constraint holds it. The projection of global constraints moves nodes by it.
   std::vector<Vec3> inverse_mass;
-  Vec3 gravity = Vec3::Zero();  // m/s^2
-  double damping = 0.0;         // 1/s
+  bool coupled_volumes = false;  // some node lies on two volume constraints (set by finalize)
+  Vec3 gravity = Vec3::Zero();   // m/s^2
+  double damping = 0.0;          // 1/s
   SimulationSpec settings;
 
   int node_count() const { return int(rest_position.size()); }

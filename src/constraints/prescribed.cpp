@@ -18,11 +18,7 @@ void apply_position_constraints(const Model& model, std::span<Vec3> x, double lo
   // Contact before volumes: the volume projection moves surface nodes by a few ulps of
   // their size only, while an obstacle may push a node by millimetres.
   apply_contacts(model, x, load_time);
-  // One pass is exact for disjoint surfaces; shared nodes need a few sweeps.
-  const int sweeps = model.volumes.size() > 1 ? 4 : 1;
-  for (int sweep = 0; sweep < sweeps; ++sweep)
-    for (const VolumeConstraint& c : model.volumes)
-      project_volume(c, model.inverse_mass, x, scratch);
+  project_volumes(model, x, load_time, scratch);
 }
 
 }  // namespace phymul

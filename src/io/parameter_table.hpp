@@ -24,6 +24,8 @@ enum class Kind {
   axes,            // non-empty combination of x, y, z
   selector,        // node selector: name, index list or {box|sphere|half_space: ...}
   schedule,        // list of {t, value} events
+  scalar_schedule,  // list of {t, value} events with a single quantity each (range: of values)
+  names,            // list of object names (range: of the entry count)
   list,            // list of maps, each described by section `child`
   map,             // map described by section `child`
 };

@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "io/parameter_table.hpp"
+#include "model/compile_interactions.hpp"
 #include "phymul/model.hpp"
 
 namespace phymul {
@@ -35,7 +36,10 @@ struct Compiler {
     try {
       const Mesh mesh = generate(o.mesh);
       const int c = add_elastic_component(model, o.name, mesh, o.material);
-      if (o.volume_constraint) add_volume_constraint(model, c);
+      if (o.volume_constraint) {
+        add_volume_constraint(model, c);
+        model.volumes.back().target_schedule = o.target_volume;
+      }
     } catch (const std::exception& e) {
       const std::string what = e.what();
       const std::string prefix = fmt::format("object '{}'", o.name);
@@ -125,6 +129,9 @@ Model compile_scene(const Scene& scene) {
       else
         add_prescribed_displacement(k.model, {std::move(nodes), c.axes, c.displacement});
     }
+    compile_interactions(
+        scene, k.model, k.problems,
+        [&](const std::string& object, const NodeSelector& s) { return k.select(object, s); });
   }
   if (!k.problems.empty()) throw SceneError(std::move(k.problems));
   try {

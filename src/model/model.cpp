@@ -38,6 +38,17 @@ std::vector<double> node_masses(const std::string& name, const Mesh& mesh,
   return share;
 }
 
+// Surfaces sharing a node disturb each other's projection: they need sweeps.
+void mark_coupled_volumes(Model& model) {
+  std::vector<char> seen(model.rest_position.size(), 0);
+  model.coupled_volumes = false;
+  for (const VolumeConstraint& c : model.volumes)
+    for (int i : c.nodes) {
+      if (seen[size_t(i)]) model.coupled_volumes = true;
+      seen[size_t(i)] = 1;
+    }
+}
+
 }  // namespace
 
 int add_elastic_component(Model& model, const std::string& name, const Mesh& mesh,
@@ -152,6 +163,7 @@ void finalize(Model& model) {
     for (int i : p.nodes)
       for (int a = 0; a < 3; ++a)
         if (p.axes[a]) model.inverse_mass[i][a] = 0.0;
+  mark_coupled_volumes(model);
 }
 
 State make_state(const Model& model) {
