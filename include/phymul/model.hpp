@@ -145,6 +145,9 @@ struct State {
   std::vector<Vec3> f;                       // N, every force but damping, at (x, time)
   std::vector<Eigen::Quaterniond> rotation;  // per shape-memory node: last best-fit rotation
   double shape_memory_energy = 0.0;          // J, sum of K |a - x|^2 / 2 at the last force pass
+  // N, per rigid obstacle: the force it exerted on the body over the last step (its impulse
+  // over dt; zero before the first step).
+  std::vector<Vec3> contact_force;
 };
 
 State make_state(const Model& model);

@@ -66,6 +66,8 @@ class Simulator {
   void check_stability() const;
   void accelerations(std::vector<Vec3>& a, bool tangent = true);
   void remove_contact_forces(std::vector<Vec3>& r) const;
+  struct ContactStep begin_contact_step(double dt);
+  void end_contact_step(double dt);
 
   Model model_;
   State state_;
@@ -73,7 +75,9 @@ class Simulator {
   double load_time_ = 0.0;  // time at which State::f was evaluated
   // Sized once: no allocation in a step.
   std::vector<Vec3> x_start_, v_start_, f_start_, a1_, scratch_;
-  double size_scale_ = 1.0;  // m, diagonal of the rest bounding box
+  std::vector<int> touching_;          // per node: obstacle in contact this step, or -1
+  std::vector<Vec3> contact_impulse_;  // per obstacle, N s, this step
+  double size_scale_ = 1.0;            // m, diagonal of the rest bounding box
 };
 
 }  // namespace phymul

@@ -34,6 +34,10 @@ void project_volumes(const Model& model, std::span<Vec3> x, double load_time,
 // then volumes (a few Gauss-Seidel sweeps when surfaces share nodes).
 void apply_position_constraints(const Model& model, std::span<Vec3> x, double load_time,
                                 std::span<Vec3> scratch);
+// The same within a step: contacts with friction, recording what they moved (contact.hpp).
+struct ContactStep;
+void apply_position_constraints(const Model& model, std::span<Vec3> x, double load_time,
+                                std::span<Vec3> scratch, ContactStep& contact);
 
 // Removes from the velocities their rate of change of each constrained volume, along the
 // same mass-weighted direction as the position projection (RATTLE's velocity stage), so

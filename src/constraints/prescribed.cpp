@@ -22,3 +22,14 @@ void apply_position_constraints(const Model& model, std::span<Vec3> x, double lo
 }
 
 }  // namespace phymul
+
+namespace phymul {
+
+void apply_position_constraints(const Model& model, std::span<Vec3> x, double load_time,
+                                std::span<Vec3> scratch, ContactStep& contact) {
+  apply_prescribed(model, x, load_time);
+  apply_contacts(model, x, load_time, contact);
+  project_volumes(model, x, load_time, scratch);
+}
+
+}  // namespace phymul

@@ -37,6 +37,13 @@ ResultWriter::ResultWriter(std::filesystem::path dir, std::string stem, const Mo
   if (!monitors_) throw std::runtime_error(fmt::format("cannot write {}", path.string()));
   monitors_ << "time_s,kinetic_energy_J,shape_memory_energy_J,max_residual_force_N";
   for (int c : closed_components_) monitors_ << ",volume_" << model.components[c].name << "_m3";
+  // The force each obstacle exerts on the body, averaged over the last step (State).
+  for (size_t k = 0; k < model.obstacles.size(); ++k) {
+    const std::string& name = model.obstacles[k].name;
+    const std::string label = name.empty() ? fmt::format("obstacle{}", k) : name;
+    for (const char* axis : {"x", "y", "z"})
+      monitors_ << ",contact_" << label << '_' << axis << "_N";
+  }
   monitors_ << '\n';
   const size_t n = model.rest_position.size() * 3;
   displacement_.resize(n);
@@ -68,6 +75,8 @@ void ResultWriter::monitor(Simulator& sim) {
   monitors_ << fmt::format("{},{},{},{}", sim.state().time, sim.kinetic_energy(),
                            sim.state().shape_memory_energy, sim.max_residual_force());
   for (int c : closed_components_) monitors_ << ',' << fmt::format("{}", volumes[c]);
+  for (const Vec3& f : sim.state().contact_force)
+    monitors_ << fmt::format(",{},{},{}", f.x(), f.y(), f.z());
   monitors_ << '\n';
 }
 

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "forces/shape_memory.hpp"
@@ -145,9 +146,9 @@ void add_rigid_obstacle(Model& model, RigidObstacle obstacle) {
       !(obstacle.length >= 0.0))
     throw std::invalid_argument(
         fmt::format("rigid obstacle: 'length' must be >= 0 m (got {})", obstacle.length));
-  if (obstacle.friction != 0.0)
-    throw std::invalid_argument(
-        "rigid obstacle: friction is not implemented yet; contact is frictionless (set 0)");
+  if (!(obstacle.friction >= 0.0) || !std::isfinite(obstacle.friction))
+    throw std::invalid_argument(fmt::format(
+        "rigid obstacle: 'friction' must be a finite value >= 0 (got {})", obstacle.friction));
   model.obstacles.push_back(std::move(obstacle));
 }
 
@@ -174,6 +175,7 @@ State make_state(const Model& model) {
   size_t memory_nodes = 0;
   for (const ShapeMemory& m : model.shape_memory) memory_nodes += m.nodes.size();
   s.rotation.assign(memory_nodes, Eigen::Quaterniond::Identity());
+  s.contact_force.assign(model.obstacles.size(), Vec3::Zero());
   return s;
 }
 

@@ -41,6 +41,8 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
   f_start_.assign(n, Vec3::Zero());
   scratch_.assign(n, Vec3::Zero());
   a1_.assign(n, Vec3::Zero());
+  touching_.assign(n, -1);
+  contact_impulse_.assign(model_.obstacles.size(), Vec3::Zero());
   size_scale_ = bounding_diagonal(model_.rest_position);
   const double stable = stable_time_step(model_);
   dt_ = model_.settings.dt ? *model_.settings.dt : model_.settings.dt_safety * stable;
@@ -70,14 +72,33 @@ void Simulator::step_verlet(double h, double load_time) {
     x_start_[i] = s.x[i];
     s.x[i] += h * (s.v[i] + 0.5 * h * a[i]);
   }
-  apply_position_constraints(model_, s.x, load_time, scratch_);
+  ContactStep contact = begin_contact_step(h);
+  apply_position_constraints(model_, s.x, load_time, scratch_, contact);
   for (int i = 0; i < model_.node_count(); ++i) s.v[i] = (s.x[i] - x_start_[i]) / h;
   compute_forces(model_, s, load_time);
   load_time_ = load_time;
   // The velocity projection below is linear: projecting the sum makes the kick tangent too.
   accelerations(a, /*tangent=*/false);
   for (int i = 0; i < model_.node_count(); ++i) s.v[i] += 0.5 * h * a[i];
+  apply_contact_velocities(model_, s.x, s.v, load_time, contact);
   project_volume_velocities(model_, s.x, s.v, scratch_);
+  end_contact_step(h);
+}
+
+// The contact stages' bookkeeping; the shape's motion over the step runs from the load time
+// of the current forces (load_time_) to the new one.
+ContactStep Simulator::begin_contact_step(double dt) {
+  std::fill(touching_.begin(), touching_.end(), -1);
+  std::fill(contact_impulse_.begin(), contact_impulse_.end(), Vec3::Zero());
+  return ContactStep{x_start_, load_time_, dt, touching_, contact_impulse_};
+}
+
+// Impulse over the step: the position stage's m dx / dt plus the velocity stage's m dv. At
+// rest on a surface both are m a dt / 2, so this is the static reaction exactly, and during
+// dynamics it is the mean contact force over the step (momentum balance).
+void Simulator::end_contact_step(double dt) {
+  for (size_t k = 0; k < contact_impulse_.size(); ++k)
+    state_.contact_force[k] = contact_impulse_[k] / dt;
 }
 
 // Without their part along the volume gradients (the pressure the projection would undo
@@ -112,9 +133,12 @@ void Simulator::step_newton_cotes(double h, double load_time) {
     s.x[i] = x_start_[i] + 0.5 * h * (v_start_[i] + s.v[i]);
     a1_[i] = s.x[i];  // spent: keep the unconstrained position instead
   }
-  apply_position_constraints(model_, s.x, load_time, scratch_);
+  ContactStep contact = begin_contact_step(h);
+  apply_position_constraints(model_, s.x, load_time, scratch_, contact);
   for (int i = 0; i < n; ++i) s.v[i] += (s.x[i] - a1_[i]) / h;
+  apply_contact_velocities(model_, s.x, s.v, load_time, contact);
   project_volume_velocities(model_, s.x, s.v, scratch_);
+  end_contact_step(h);
   compute_forces(model_, s, load_time);
   load_time_ = load_time;
 }
@@ -180,7 +204,11 @@ void Simulator::remove_contact_forces(std::vector<Vec3>& r) const {
     if (std::abs(d.distance) > kTouching) return;
     const Vec3 push = o.keep_inside ? Vec3(-d.normal) : d.normal;  // how the obstacle can push
     const double into = r[i].dot(push);
-    if (into < 0.0) r[i] -= into * push;
+    if (into >= 0.0) return;
+    r[i] -= into * push;
+    // Friction holds a tangential force up to mu times the normal one.
+    const double tangential = r[i].norm(), bound = -o.friction * into;
+    if (tangential > 0.0) r[i] *= tangential <= bound ? 0.0 : (tangential - bound) / tangential;
   };
   for (const RigidObstacle& o : model_.obstacles) {
     if (o.nodes.empty())
