@@ -85,6 +85,14 @@ struct RigidObstacle {
   double friction = 0.0;      // Coulomb coefficient; not implemented yet: must be 0
 };
 
+// Two deformable components that may touch but not interpenetrate (frictionless): each
+// surface node of one is kept out of the other's closed boundary, node against triangle.
+struct ContactPair {
+  std::array<int, 2> components{0, 0};
+  std::array<std::vector<Triangle>, 2> faces;  // each component's boundary, global ids
+  std::array<std::vector<int>, 2> nodes;       // each component's surface nodes, sorted
+};
+
 struct Component {
   std::string name;
   int first_node = 0, node_count = 0;
@@ -106,6 +114,7 @@ struct Model {
   std::vector<PrescribedDisplacement> prescribed;
   std::vector<PressureLoad> pressures;
   std::vector<RigidObstacle> obstacles;
+  std::vector<ContactPair> contact_pairs;
   // Per node and axis: 1/m where the node is free to move along that axis, 0 where a
   // position constraint holds it. The projection of global constraints moves nodes by it.
   std::vector<Vec3> inverse_mass;
@@ -127,6 +136,8 @@ void add_prescribed_displacement(Model& model, PrescribedDisplacement prescribed
 void add_applied_force(Model& model, AppliedForce force);
 void add_pressure(Model& model, PressureLoad pressure);
 void add_rigid_obstacle(Model& model, RigidObstacle obstacle);
+// Frictionless contact between two components with closed boundaries.
+void add_contact_pair(Model& model, int component_a, int component_b);
 // The boundary faces of `component` whose rest centroid lies within `radius` of the infinite
 // line through axis_point along axis_direction (the paper's cylinder-shaped probe pressure).
 std::vector<Triangle> faces_in_cylinder(const Model& model, int component, const Vec3& axis_point,
@@ -148,6 +159,9 @@ struct State {
   // N, per rigid obstacle: the force it exerted on the body over the last step (its impulse
   // over dt; zero before the first step).
   std::vector<Vec3> contact_force;
+  // N, per contact pair: the force the second component exerted on the first over the last
+  // step.
+  std::vector<Vec3> pair_contact_force;
 };
 
 State make_state(const Model& model);

@@ -2,11 +2,16 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "phymul/model.hpp"
+
+namespace phymul {
+struct DeformableContactWorkspace;
+}
 
 namespace phymul {
 
@@ -77,7 +82,9 @@ class Simulator {
   std::vector<Vec3> x_start_, v_start_, f_start_, a1_, scratch_;
   std::vector<int> touching_;          // per node: obstacle in contact this step, or -1
   std::vector<Vec3> contact_impulse_;  // per obstacle, N s, this step
-  double size_scale_ = 1.0;            // m, diagonal of the rest bounding box
+  std::vector<Vec3> pair_impulse_;     // per contact pair, N s, this step
+  std::shared_ptr<DeformableContactWorkspace> deformable_;  // null without contact pairs
+  double size_scale_ = 1.0;                                 // m, diagonal of the rest bounding box
 };
 
 }  // namespace phymul

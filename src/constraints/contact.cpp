@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "constraints/deformable_contact.hpp"
+
 namespace phymul {
 namespace {
 
@@ -152,6 +154,8 @@ void apply_contacts(const Model& model, std::span<Vec3> x, double load_time, Con
 
 void apply_contact_velocities(const Model& model, std::span<const Vec3> x, std::span<Vec3> v,
                               double load_time, ContactStep& step) {
+  if (step.deformable)
+    apply_deformable_contact_velocities(model, v, *step.deformable, step.pair_impulse);
   if (model.obstacles.empty()) return;
   for (int i = 0; i < model.node_count(); ++i) {
     const int k = step.touching[i];

@@ -38,6 +38,9 @@ struct ContactStep {
   double dt = 0.0;                // s
   std::span<int> touching;        // per node: the obstacle that last moved it this step, or -1
   std::span<Vec3> impulse;        // N s, per obstacle: momentum it gave the body this step
+  // Contact between deformable components (deformable_contact.hpp), when the model has any.
+  struct DeformableContactWorkspace* deformable = nullptr;
+  std::span<Vec3> pair_impulse;  // N s, per contact pair: momentum given to its first component
 };
 
 // Position stage with Coulomb friction: projects like apply_contacts, then cancels the

@@ -1,5 +1,6 @@
 #include "constraints/constraints.hpp"
 #include "constraints/contact.hpp"
+#include "constraints/deformable_contact.hpp"
 
 namespace phymul {
 
@@ -29,6 +30,8 @@ void apply_position_constraints(const Model& model, std::span<Vec3> x, double lo
                                 std::span<Vec3> scratch, ContactStep& contact) {
   apply_prescribed(model, x, load_time);
   apply_contacts(model, x, load_time, contact);
+  if (contact.deformable)
+    apply_deformable_contacts(model, x, *contact.deformable, contact.dt, contact.pair_impulse);
   project_volumes(model, x, load_time, scratch);
 }
 

@@ -44,6 +44,13 @@ ResultWriter::ResultWriter(std::filesystem::path dir, std::string stem, const Mo
     for (const char* axis : {"x", "y", "z"})
       monitors_ << ",contact_" << label << '_' << axis << "_N";
   }
+  // The force the second object of each contact pair exerts on the first.
+  for (const ContactPair& pair : model.contact_pairs) {
+    const std::string label = model.components[size_t(pair.components[0])].name + "_" +
+                              model.components[size_t(pair.components[1])].name;
+    for (const char* axis : {"x", "y", "z"})
+      monitors_ << ",contact_" << label << '_' << axis << "_N";
+  }
   monitors_ << '\n';
   const size_t n = model.rest_position.size() * 3;
   displacement_.resize(n);
@@ -76,6 +83,8 @@ void ResultWriter::monitor(Simulator& sim) {
                            sim.state().shape_memory_energy, sim.max_residual_force());
   for (int c : closed_components_) monitors_ << ',' << fmt::format("{}", volumes[c]);
   for (const Vec3& f : sim.state().contact_force)
+    monitors_ << fmt::format(",{},{},{}", f.x(), f.y(), f.z());
+  for (const Vec3& f : sim.state().pair_contact_force)
     monitors_ << fmt::format(",{},{},{}", f.x(), f.y(), f.z());
   monitors_ << '\n';
 }

@@ -111,6 +111,15 @@ void compile_interactions(const Scene& scene, Model& model, std::vector<Diagnost
                           const SelectNodes& select) {
   for (const PressureSpec& p : scene.pressures) compile_pressure(p, model, problems, select);
   compile_obstacles(scene, model, problems);
+  for (const ContactSpec& c : scene.contacts) {
+    const int a = component_index(model, c.objects[0]), b = component_index(model, c.objects[1]);
+    if (a < 0 || b < 0) continue;  // reported by the reader's reference check
+    try {
+      add_contact_pair(model, a, b);
+    } catch (const std::exception& e) {
+      problems.push_back({c.loc, e.what()});
+    }
+  }
 }
 
 }  // namespace phymul

@@ -152,6 +152,29 @@ void add_rigid_obstacle(Model& model, RigidObstacle obstacle) {
   model.obstacles.push_back(std::move(obstacle));
 }
 
+void add_contact_pair(Model& model, int component_a, int component_b) {
+  const int count = int(model.components.size());
+  if (component_a < 0 || component_a >= count || component_b < 0 || component_b >= count ||
+      component_a == component_b)
+    throw std::invalid_argument(
+        fmt::format("contact: needs two distinct components out of {} (got {} and {})", count,
+                    component_a, component_b));
+  ContactPair pair;
+  pair.components = {component_a, component_b};
+  for (int side = 0; side < 2; ++side) {
+    const Component& c = model.components[size_t(pair.components[size_t(side)])];
+    if (c.boundary.empty())
+      throw std::invalid_argument(
+          fmt::format("contact: object '{}' has no closed boundary surface to touch with", c.name));
+    pair.faces[size_t(side)] = c.boundary;
+    std::vector<int>& nodes = pair.nodes[size_t(side)];
+    for (const Triangle& t : c.boundary) nodes.insert(nodes.end(), t.begin(), t.end());
+    std::sort(nodes.begin(), nodes.end());
+    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  }
+  model.contact_pairs.push_back(std::move(pair));
+}
+
 void finalize(Model& model) {
   model.inverse_mass.assign(model.rest_position.size(), Vec3::Zero());
   for (int i = 0; i < model.node_count(); ++i) {
@@ -176,6 +199,7 @@ State make_state(const Model& model) {
   for (const ShapeMemory& m : model.shape_memory) memory_nodes += m.nodes.size();
   s.rotation.assign(memory_nodes, Eigen::Quaterniond::Identity());
   s.contact_force.assign(model.obstacles.size(), Vec3::Zero());
+  s.pair_contact_force.assign(model.contact_pairs.size(), Vec3::Zero());
   return s;
 }
 

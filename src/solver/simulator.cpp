@@ -6,6 +6,7 @@
 
 #include "constraints/constraints.hpp"
 #include "constraints/contact.hpp"
+#include "constraints/deformable_contact.hpp"
 #include "forces/forces.hpp"
 
 namespace phymul {
@@ -43,6 +44,11 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
   a1_.assign(n, Vec3::Zero());
   touching_.assign(n, -1);
   contact_impulse_.assign(model_.obstacles.size(), Vec3::Zero());
+  pair_impulse_.assign(model_.contact_pairs.size(), Vec3::Zero());
+  if (!model_.contact_pairs.empty()) {
+    deformable_ = std::make_shared<DeformableContactWorkspace>();
+    deformable_->prepare(model_);
+  }
   size_scale_ = bounding_diagonal(model_.rest_position);
   const double stable = stable_time_step(model_);
   dt_ = model_.settings.dt ? *model_.settings.dt : model_.settings.dt_safety * stable;
@@ -90,7 +96,9 @@ void Simulator::step_verlet(double h, double load_time) {
 ContactStep Simulator::begin_contact_step(double dt) {
   std::fill(touching_.begin(), touching_.end(), -1);
   std::fill(contact_impulse_.begin(), contact_impulse_.end(), Vec3::Zero());
-  return ContactStep{x_start_, load_time_, dt, touching_, contact_impulse_};
+  std::fill(pair_impulse_.begin(), pair_impulse_.end(), Vec3::Zero());
+  return ContactStep{x_start_,         load_time_,        dt,           touching_,
+                     contact_impulse_, deformable_.get(), pair_impulse_};
 }
 
 // Impulse over the step: the position stage's m dx / dt plus the velocity stage's m dv. At
@@ -99,6 +107,8 @@ ContactStep Simulator::begin_contact_step(double dt) {
 void Simulator::end_contact_step(double dt) {
   for (size_t k = 0; k < contact_impulse_.size(); ++k)
     state_.contact_force[k] = contact_impulse_[k] / dt;
+  for (size_t k = 0; k < pair_impulse_.size(); ++k)
+    state_.pair_contact_force[k] = pair_impulse_[k] / dt;
 }
 
 // Without their part along the volume gradients (the pressure the projection would undo
@@ -190,6 +200,7 @@ double Simulator::max_residual_force() {
     for (int i : c.nodes) r[i] -= pressure * scratch_[i];
   }
   remove_contact_forces(r);
+  if (deformable_) add_deformable_contact_forces(*deformable_, dt_, r);
   double largest = 0.0;
   for (int i = 0; i < model_.node_count(); ++i) largest = std::max(largest, r[i].norm());
   return largest;
