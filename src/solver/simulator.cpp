@@ -210,9 +210,12 @@ double Simulator::max_residual_force() {
 // residual is the contact's reaction, not an imbalance.
 void Simulator::remove_contact_forces(std::vector<Vec3>& r) const {
   constexpr double kTouching = 1e-12;  // m, as obstacle_force counts contact
+  // Touching: on the surface, or put on it by the last step's contact stage (the volume
+  // projection after it may have moved the node off by a hair).
   auto remove = [&](const RigidObstacle& o, int i) {
     const SurfaceDistance d = obstacle_distance(o, state_.x[i], load_time_);
-    if (std::abs(d.distance) > kTouching) return;
+    const bool moved = touching_[size_t(i)] == int(&o - model_.obstacles.data());
+    if (std::abs(d.distance) > kTouching && !moved) return;
     const Vec3 push = o.keep_inside ? Vec3(-d.normal) : d.normal;  // how the obstacle can push
     const double into = r[i].dot(push);
     if (into >= 0.0) return;
