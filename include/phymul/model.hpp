@@ -82,7 +82,7 @@ struct RigidObstacle {
   Schedule motion;            // m, translation of the shape over time (empty: fixed)
   bool keep_inside = false;   // a container instead of an obstacle
   std::vector<int> nodes;     // global ids it acts on; empty = all nodes
-  double friction = 0.0;      // Coulomb coefficient; not implemented yet: must be 0
+  double friction = 0.0;      // Coulomb coefficient (>= 0) between the shape and the nodes
 };
 
 // Two deformable components that may touch but not interpenetrate (frictionless): each
