@@ -187,17 +187,26 @@ double Simulator::max_residual_force() {
   std::vector<Vec3>& r = f_start_;
   for (int i = 0; i < model_.node_count(); ++i)
     r[i] = state_.f[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
-  for (const VolumeConstraint& c : model_.volumes) {
-    volume_gradient(c, state_.x, scratch_);
-    double rg = 0.0, gg = 0.0;
-    for (int i : c.nodes) {
-      scratch_[i] = scratch_[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
-      rg += r[i].dot(scratch_[i]);
-      gg += scratch_[i].squaredNorm();
+  // Surfaces sharing nodes: Gauss-Seidel sweeps until what is left to take out is far
+  // below the tolerance (one pass is exact for disjoint ones).
+  const int sweeps = model_.coupled_volumes ? 200 : 1;
+  for (int sweep = 0; sweep < sweeps; ++sweep) {
+    double largest_change = 0.0;
+    for (const VolumeConstraint& c : model_.volumes) {
+      volume_gradient(c, state_.x, scratch_);
+      double rg = 0.0, gg = 0.0, longest = 0.0;
+      for (int i : c.nodes) {
+        scratch_[i] = scratch_[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
+        rg += r[i].dot(scratch_[i]);
+        gg += scratch_[i].squaredNorm();
+        longest = std::max(longest, scratch_[i].norm());
+      }
+      if (gg == 0.0) continue;
+      const double pressure = rg / gg;  // the part of the force the constraint balances
+      for (int i : c.nodes) r[i] -= pressure * scratch_[i];
+      largest_change = std::max(largest_change, std::abs(pressure) * longest);
     }
-    if (gg == 0.0) continue;
-    const double pressure = rg / gg;  // the part of the force the constraint balances
-    for (int i : c.nodes) r[i] -= pressure * scratch_[i];
+    if (largest_change <= 1e-3 * model_.settings.tolerance) break;
   }
   remove_contact_forces(r);
   if (deformable_) add_deformable_contact_forces(*deformable_, dt_, r);
@@ -237,16 +246,24 @@ std::vector<Vec3> Simulator::support_reactions() const {
   // against the forces on the free axes (what max_residual_force takes out).
   std::vector<Vec3> reaction(state_.f);
   std::vector<Vec3> grad(state_.x.size(), Vec3::Zero());
-  for (const VolumeConstraint& c : model_.volumes) {
-    volume_gradient(c, state_.x, grad);
-    double fg = 0.0, gg = 0.0;
-    for (int i : c.nodes) {
-      const Vec3 free_grad = grad[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
-      fg += state_.f[i].dot(free_grad);
-      gg += free_grad.squaredNorm();
+  // Coupled surfaces: Gauss-Seidel sweeps, as in max_residual_force.
+  const int sweeps = model_.coupled_volumes ? 200 : 1;
+  for (int sweep = 0; sweep < sweeps; ++sweep) {
+    double largest_change = 0.0;
+    for (const VolumeConstraint& c : model_.volumes) {
+      volume_gradient(c, state_.x, grad);
+      double fg = 0.0, gg = 0.0, longest = 0.0;
+      for (int i : c.nodes) {
+        const Vec3 free_grad = grad[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
+        fg += reaction[i].dot(free_grad);
+        gg += free_grad.squaredNorm();
+        longest = std::max(longest, grad[i].norm());
+      }
+      if (gg == 0.0) continue;
+      for (int i : c.nodes) reaction[i] -= (fg / gg) * grad[i];
+      largest_change = std::max(largest_change, std::abs(fg / gg) * longest);
     }
-    if (gg == 0.0) continue;
-    for (int i : c.nodes) reaction[i] -= (fg / gg) * grad[i];
+    if (largest_change <= 1e-3 * model_.settings.tolerance) break;
   }
   for (int i = 0; i < model_.node_count(); ++i) {
     const Vec3 held = Vec3::Ones() - free_axes(model_.inverse_mass[i]);

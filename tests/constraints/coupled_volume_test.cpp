@@ -114,6 +114,27 @@ TEST(CoupledVolumes, ScheduledTargetIsFollowedWhileTheOtherChamberKeepsItsVolume
   EXPECT_NEAR(left, 1.2 * v0, 1e-10 * v0);
 }
 
+TEST(CoupledVolumes, StaticRelaxationConvergesWithSharedNodes) {
+  // The residual takes out what the two coupled pressures balance together; relaxation then
+  // reaches a tight tolerance and both volumes stay exact.
+  Model m = two_chambers();
+  m.settings.tolerance = 1e-9;
+  Simulator sim(m);
+  const StaticResult r = sim.relax(0.2, 50000);
+  std::printf("two chambers static: %s in %ld iterations, residual %.3g N\n",
+              r.converged ? "converged" : "NOT converged", r.iterations, r.residual);
+  EXPECT_TRUE(r.converged);
+  EXPECT_LT(relative_error(m, sim.state(), 0), 1e-10);
+  EXPECT_LT(relative_error(m, sim.state(), 1), 1e-10);
+  // The supports carry the weight: the pressures of the two chambers cancel out overall.
+  Vec3 support = Vec3::Zero();
+  for (const Vec3& f : sim.support_reactions()) support += f;
+  double weight = 0.0;
+  for (double mass : m.mass) weight += mass * 9.81;
+  EXPECT_NEAR(support.z(), weight, m.node_count() * m.settings.tolerance);
+  EXPECT_NEAR(support.x(), 0.0, m.node_count() * m.settings.tolerance);
+}
+
 TEST(CoupledVolumes, BalloonFollowsAFillingSchedule) {
   Model model;
   const int c =
