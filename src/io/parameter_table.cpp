@@ -35,11 +35,14 @@ const std::vector<Section>& sections() {
       {"mesh", "objects[].mesh", "The generated mesh of an object."},
       {"material", "objects[].material",
        "Shape-memory material of an object. Give its `density` or its total `mass`."},
-      {"load", "loads[]", "Each entry of `loads`: a nodal force, the same on every selected node."},
+      {"load", "loads[]",
+       "Each entry of `loads`: a nodal force, the same on every selected node, or a pressure on "
+       "boundary faces."},
       {"constraint", "constraints[]",
        "Each entry of `constraints`: nodes held in place or moved by a prescribed displacement."},
       {"schedule", "schedule[]",
-       "Each event of `loads[].schedule` and `constraints[].schedule`. Values are linear between "
+       "Each event of `loads[].schedule`, `constraints[].schedule` and `obstacles[].motion`. "
+       "Values are linear between "
        "events, held before the first and after the last."},
       {"pressure_cylinder", "loads[].cylinder",
        "The faces of a pressure load whose rest centroid lies within `radius` of an infinite "
