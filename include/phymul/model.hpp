@@ -40,6 +40,10 @@ struct VolumeConstraint {
   std::vector<Triangle> triangles;  // global node ids
   std::vector<int> nodes;           // the surface's nodes, sorted
   double target_volume = 0.0;       // m^3
+  Schedule target_schedule;         // m^3 in x over time; empty: target_volume throughout
+  double target_at(double load_time) const {
+    return target_schedule.empty() ? target_volume : target_schedule.at(load_time).x();
+  }
 };
 
 struct AppliedForce {
@@ -70,6 +74,7 @@ struct RigidObstacle {
   // to point + length * axis (both ends rounded); rounded_cylinder: an endorectal probe, a
   // capsule whose base end extends to infinity backwards (open there, rounded at the tip).
   enum class Shape { plane, sphere, capsule, rounded_cylinder };
+  std::string name;  // names its monitors columns; "" = obstacle<index>
   Shape shape = Shape::plane;
   Vec3 point = Vec3::Zero();  // m, at load time 0
   Vec3 axis = Vec3::UnitZ();  // normalised by add_rigid_obstacle
@@ -78,7 +83,15 @@ struct RigidObstacle {
   Schedule motion;            // m, translation of the shape over time (empty: fixed)
   bool keep_inside = false;   // a container instead of an obstacle
   std::vector<int> nodes;     // global ids it acts on; empty = all nodes
-  double friction = 0.0;      // Coulomb coefficient; not implemented yet: must be 0
+  double friction = 0.0;      // Coulomb coefficient (>= 0) between the shape and the nodes
+};
+
+// Two deformable components that may touch but not interpenetrate (frictionless): each
+// surface node of one is kept out of the other's closed boundary, node against triangle.
+struct ContactPair {
+  std::array<int, 2> components{0, 0};
+  std::array<std::vector<Triangle>, 2> faces;  // each component's boundary, global ids
+  std::array<std::vector<int>, 2> nodes;       // each component's surface nodes, sorted
 };
 
 enum class ComponentKind { elastic, rigid, active };
@@ -145,11 +158,13 @@ struct Model {
   Adjacency doubled;                               // groups among elastic nodes (finalize)
   std::vector<std::array<int, 3>> doubled_leader;  // per group and axis: a held member or -1
   std::vector<int> rigid_body_of;                  // per node: body index or -1 (finalize)
+  std::vector<ContactPair> contact_pairs;
   // Per node and axis: 1/m where the node is free to move along that axis, 0 where a
   // position constraint holds it. The projection of global constraints moves nodes by it.
   std::vector<Vec3> inverse_mass;
-  Vec3 gravity = Vec3::Zero();  // m/s^2
-  double damping = 0.0;         // 1/s
+  bool coupled_volumes = false;  // some node lies on two volume constraints (set by finalize)
+  Vec3 gravity = Vec3::Zero();   // m/s^2
+  double damping = 0.0;          // 1/s
   SimulationSpec settings;
 
   int node_count() const { return int(rest_position.size()); }
@@ -165,6 +180,8 @@ void add_prescribed_displacement(Model& model, PrescribedDisplacement prescribed
 void add_applied_force(Model& model, AppliedForce force);
 void add_pressure(Model& model, PressureLoad pressure);
 void add_rigid_obstacle(Model& model, RigidObstacle obstacle);
+// Frictionless contact between two components with closed boundaries.
+void add_contact_pair(Model& model, int component_a, int component_b);
 // The boundary faces of `component` whose rest centroid lies within `radius` of the infinite
 // line through axis_point along axis_direction (the paper's cylinder-shaped probe pressure).
 std::vector<Triangle> faces_in_cylinder(const Model& model, int component, const Vec3& axis_point,
@@ -215,6 +232,12 @@ struct State {
   double shape_memory_energy = 0.0;          // J, sum of K |a - x|^2 / 2 at the last force pass
 
   std::vector<RigidBodyState> bodies;  // per Model::rigid_bodies
+  // N, per rigid obstacle: the force it exerted on the body over the last step (its impulse
+  // over dt; zero before the first step).
+  std::vector<Vec3> contact_force;
+  // N, per contact pair: the force the second component exerted on the first over the last
+  // step.
+  std::vector<Vec3> pair_contact_force;
 };
 
 State make_state(const Model& model);

@@ -117,6 +117,7 @@ struct ObjectSpec {
   MeshSpec mesh;
   MaterialSpec material;
   bool volume_constraint = false;  // keep the volume enclosed by its boundary surface
+  Schedule target_volume;          // m^3 in x over time; empty: the rest volume
 
   std::optional<MotionSpec> motion;  // rigid: driven when given
   FibreSpec fibres;                  // active
@@ -148,6 +149,40 @@ struct ConstraintSpec {
   SourceLoc loc;
 };
 
+// A follower pressure on the boundary faces of an object (loads with `type: pressure`).
+struct PressureSpec {
+  std::string object;
+  NodeSelector nodes;  // the faces whose nodes are all selected
+  bool in_cylinder = false;
+  Eigen::Vector3d cylinder_point = Eigen::Vector3d::Zero();  // m
+  Eigen::Vector3d cylinder_axis = Eigen::Vector3d::UnitZ();  // normalised
+  double cylinder_radius = 0.0;                              // m
+  Schedule pressure;                                         // Pa in x
+  SourceLoc loc;
+};
+
+// A rigid analytic obstacle (top-level `obstacles:`); see RigidObstacle.
+struct ObstacleSpec {
+  enum class Shape { plane, sphere, capsule, probe };
+  std::string name;  // monitors column; "" = obstacle<index>
+  Shape shape = Shape::plane;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // m
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();     // normalised
+  double radius = 0.0, length = 0.0;                   // m
+  Schedule motion;                                     // m, translation
+  bool keep_inside = false;
+  std::vector<std::string> objects;  // empty: all
+  std::vector<SourceLoc> object_locs;
+  double friction = 0.0;
+  SourceLoc loc;
+};
+
+// Two deformable objects in frictionless contact (top-level `contacts:`).
+struct ContactSpec {
+  std::array<std::string, 2> objects;
+  SourceLoc loc;
+};
+
 struct OutputSpec {
   double interval = 0.0;  // s between frames (dynamic); 0 = first and last frame only
   bool vtk = true;
@@ -161,6 +196,9 @@ struct Scene {
   std::vector<LoadSpec> loads;
   std::vector<ConstraintSpec> constraints;
   std::vector<LinkSpec> stitches, doubled;
+  std::vector<PressureSpec> pressures;
+  std::vector<ObstacleSpec> obstacles;
+  std::vector<ContactSpec> contacts;
   OutputSpec output;
 };
 

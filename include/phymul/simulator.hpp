@@ -2,11 +2,16 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "phymul/model.hpp"
+
+namespace phymul {
+struct DeformableContactWorkspace;
+}
 
 namespace phymul {
 
@@ -88,6 +93,8 @@ class Simulator {
   StaticResult static_load_steps(const std::function<void(long, double)>& progress);
   void accelerations(std::vector<Vec3>& a, bool tangent = true);
   void remove_contact_forces(std::vector<Vec3>& r) const;
+  struct ContactStep begin_contact_step(double dt);
+  void end_contact_step(double dt);
 
   Model model_;
   State state_;
@@ -96,7 +103,11 @@ class Simulator {
   StaticProgress static_progress_;
   // Sized once: no allocation in a step.
   std::vector<Vec3> x_start_, v_start_, f_start_, a1_, scratch_;
-  double size_scale_ = 1.0;            // m, diagonal of the rest bounding box
+  std::vector<int> touching_;          // per node: obstacle in contact this step, or -1
+  std::vector<Vec3> contact_impulse_;  // per obstacle, N s, this step
+  std::vector<Vec3> pair_impulse_;     // per contact pair, N s, this step
+  std::shared_ptr<DeformableContactWorkspace> deformable_;  // null without contact pairs
+  double size_scale_ = 1.0;                                 // m, diagonal of the rest bounding box
   std::vector<double> shortest_edge_;  // m per node, for the runaway guard (runaway_guard.hpp)
 };
 

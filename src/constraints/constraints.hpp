@@ -20,12 +20,25 @@ void volume_gradient(const VolumeConstraint& c, std::span<const Vec3> x, std::sp
 // std::runtime_error when no free node can change the volume. grad is scratch (node count).
 double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
                       std::span<Vec3> x, std::span<Vec3> grad);
+// The same towards `target` (m^3); reports |V - target| / target before the move.
+double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
+                      std::span<Vec3> x, std::span<Vec3> grad, double target,
+                      double* relative_error_before = nullptr);
+
+// Every volume constraint at its target at load_time: one pass when the surfaces are
+// disjoint, Gauss-Seidel sweeps until all are within round-off when they share nodes.
+void project_volumes(const Model& model, std::span<Vec3> x, double load_time,
+                     std::span<Vec3> scratch);
 
 // All position constraints in the DESIGN's order: prescribed, rigid obstacles (contact.hpp),
 // then volumes (a few Gauss-Seidel sweeps when surfaces share nodes), then doubled nodes
 // (doubled.hpp). Rigid bodies place their nodes before (solver/rigid.hpp).
 void apply_position_constraints(const Model& model, std::span<Vec3> x, double load_time,
                                 std::span<Vec3> scratch);
+// The same within a step: contacts with friction, recording what they moved (contact.hpp).
+struct ContactStep;
+void apply_position_constraints(const Model& model, std::span<Vec3> x, double load_time,
+                                std::span<Vec3> scratch, ContactStep& contact);
 
 // Removes from the velocities their rate of change of each constrained volume, along the
 // same mass-weighted direction as the position projection (RATTLE's velocity stage), so

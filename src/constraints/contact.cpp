@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "constraints/deformable_contact.hpp"
+
 namespace phymul {
 namespace {
 
@@ -72,6 +74,27 @@ Vec3 free_axes_of(const Vec3& inverse_mass) {
   return (inverse_mass.array() > 0.0).cast<double>().matrix();
 }
 
+// Translation of the shape between two load times.
+Vec3 shape_shift(const RigidObstacle& o, double from, double to) {
+  return o.motion.at(to) - o.motion.at(from);
+}
+
+// Position-based Coulomb friction after a normal projection of `normal` metres: the slip
+// relative to the shape over the step is cancelled (stick) while it is within mu * normal,
+// else shortened by that much (slide). A container's wall curves inward, so the node is
+// projected once more.
+void apply_friction(const RigidObstacle& o, const Vec3& free, Vec3& x, const Vec3& x_start,
+                    const Vec3& shift, double normal, double load_time) {
+  const Vec3 n = obstacle_distance(o, x, load_time).normal;
+  Vec3 slip = (x - x_start) - shift;
+  slip = (slip - slip.dot(n) * n).cwiseProduct(free);
+  const double length = slip.norm();
+  if (length == 0.0) return;
+  const double bound = o.friction * normal;
+  x -= (length <= bound ? 1.0 : bound / length) * slip;
+  project_node(o, free, x, load_time);
+}
+
 }  // namespace
 
 SurfaceDistance obstacle_distance(const RigidObstacle& o, const Vec3& x, double load_time) {
@@ -106,6 +129,52 @@ void project_obstacle(const RigidObstacle& o, std::span<const Vec3> inverse_mass
 void apply_contacts(const Model& model, std::span<Vec3> x, double load_time) {
   for (const RigidObstacle& o : model.obstacles)
     project_obstacle(o, model.inverse_mass, x, load_time);
+}
+
+void apply_contacts(const Model& model, std::span<Vec3> x, double load_time, ContactStep& step) {
+  for (size_t k = 0; k < model.obstacles.size(); ++k) {
+    const RigidObstacle& o = model.obstacles[k];
+    const Vec3 shift = shape_shift(o, step.start_time, load_time);
+    auto one = [&](int i) {
+      const Vec3 free = free_axes_of(model.inverse_mass[i]);
+      const Vec3 before = x[i];
+      project_node(o, free, x[i], load_time);
+      if (x[i] == before) return;
+      if (o.friction > 0.0)
+        apply_friction(o, free, x[i], step.x_start[i], shift, (x[i] - before).norm(), load_time);
+      step.touching[i] = int(k);
+      step.impulse[k] += model.mass[i] * (x[i] - before) / step.dt;
+    };
+    if (o.nodes.empty())
+      for (int i = 0; i < model.node_count(); ++i) one(i);
+    else
+      for (int i : o.nodes) one(i);
+  }
+}
+
+void apply_contact_velocities(const Model& model, std::span<const Vec3> x, std::span<Vec3> v,
+                              double load_time, ContactStep& step) {
+  if (step.deformable)
+    apply_deformable_contact_velocities(model, v, *step.deformable, step.pair_impulse);
+  if (model.obstacles.empty()) return;
+  for (int i = 0; i < model.node_count(); ++i) {
+    const int k = step.touching[i];
+    if (k < 0) continue;
+    const RigidObstacle& o = model.obstacles[size_t(k)];
+    const Vec3 n = obstacle_distance(o, x[i], load_time).normal;
+    const Vec3 push = o.keep_inside ? Vec3(-n) : n;  // the way the shape can push
+    const Vec3 shape_velocity = shape_shift(o, step.start_time, load_time) / step.dt;
+    const Vec3 u = v[i] - shape_velocity;
+    const double into = -u.dot(push);
+    if (into <= 0.0) continue;  // already leaving the surface
+    Vec3 dv = into * push;
+    const Vec3 tangential = u + into * push;
+    const double slip = tangential.norm();
+    if (slip > 0.0) dv -= std::min(1.0, o.friction * into / slip) * tangential;
+    dv = dv.cwiseProduct(free_axes_of(model.inverse_mass[i]));
+    v[i] += dv;
+    step.impulse[size_t(k)] += model.mass[i] * dv;
+  }
 }
 
 Vec3 obstacle_force(const Model& model, const State& state, int obstacle) {

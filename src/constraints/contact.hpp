@@ -30,4 +30,29 @@ void project_obstacle(const RigidObstacle& obstacle, std::span<const Vec3> inver
 // Every obstacle of the model, in order.
 void apply_contacts(const Model& model, std::span<Vec3> x, double load_time);
 
+// What one step's contact stages need and record. Buffers are the caller's, sized once
+// (node count for `touching`, obstacle count for `impulse`): a step allocates nothing.
+struct ContactStep {
+  std::span<const Vec3> x_start;  // m, positions at the start of the step
+  double start_time = 0.0;        // s, load time at the start of the step
+  double dt = 0.0;                // s
+  std::span<int> touching;        // per node: the obstacle that last moved it this step, or -1
+  std::span<Vec3> impulse;        // N s, per obstacle: momentum it gave the body this step
+  // Contact between deformable components (deformable_contact.hpp), when the model has any.
+  struct DeformableContactWorkspace* deformable = nullptr;
+  std::span<Vec3> pair_impulse;  // N s, per contact pair: momentum given to its first component
+};
+
+// Position stage with Coulomb friction: projects like apply_contacts, then cancels the
+// node's tangential displacement relative to the moving shape while it is within
+// friction * (normal correction), else shortens it by that much. Records which nodes each
+// obstacle moved and the momentum m dx / dt it gave them.
+void apply_contacts(const Model& model, std::span<Vec3> x, double load_time, ContactStep& step);
+
+// Velocity stage (RATTLE-like) for the nodes the position stage moved: removes their
+// velocity into the shape relative to its own motion, and applies Coulomb friction to the
+// tangential part with the normal impulse as bound. Adds m dv to step.impulse.
+void apply_contact_velocities(const Model& model, std::span<const Vec3> x, std::span<Vec3> v,
+                              double load_time, ContactStep& step);
+
 }  // namespace phymul

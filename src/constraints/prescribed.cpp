@@ -1,5 +1,6 @@
 #include "constraints/constraints.hpp"
 #include "constraints/contact.hpp"
+#include "constraints/deformable_contact.hpp"
 #include "constraints/doubled.hpp"
 
 namespace phymul {
@@ -19,12 +20,18 @@ void apply_position_constraints(const Model& model, std::span<Vec3> x, double lo
   // Contact before volumes: the volume projection moves surface nodes by a few ulps of
   // their size only, while an obstacle may push a node by millimetres.
   apply_contacts(model, x, load_time);
-  // One pass is exact for disjoint surfaces; shared nodes need a few sweeps.
-  const int sweeps = model.volumes.size() > 1 ? 4 : 1;
-  for (int sweep = 0; sweep < sweeps; ++sweep)
-    for (const VolumeConstraint& c : model.volumes)
-      project_volume(c, model.inverse_mass, x, scratch);
+  project_volumes(model, x, load_time, scratch);
   // Doubled nodes last, so that they coincide exactly after every projection.
+  project_doubled(model, x);
+}
+
+void apply_position_constraints(const Model& model, std::span<Vec3> x, double load_time,
+                                std::span<Vec3> scratch, ContactStep& contact) {
+  apply_prescribed(model, x, load_time);
+  apply_contacts(model, x, load_time, contact);
+  if (contact.deformable)
+    apply_deformable_contacts(model, x, *contact.deformable, contact.dt, contact.pair_impulse);
+  project_volumes(model, x, load_time, scratch);
   project_doubled(model, x);
 }
 

@@ -22,6 +22,12 @@ const Condition kVolume{"surface", {"false"}};
 const Condition kDisplacement{"type", {"displacement"}};
 const Condition kRigid{"type", {"rigid"}};
 const Condition kActive{"type", {"active"}};
+const Condition kForce{"type", {"force"}};
+const Condition kPressure{"type", {"pressure"}};
+const Condition kVolumeKept{"volume_constraint", {"true"}};
+const Condition kAxisShape{"shape", {"plane", "capsule", "probe"}};
+const Condition kRoundShape{"shape", {"sphere", "capsule", "probe"}};
+const Condition kCapsule{"shape", {"capsule"}};
 
 const std::vector<Section>& sections() {
   static const std::vector<Section> table{
@@ -32,12 +38,29 @@ const std::vector<Section>& sections() {
        "The mesh of an object: generated (`generator`) or read from a file (`file`)."},
       {"material", "objects[].material",
        "Shape-memory material of an object. Give its `density` or its total `mass`."},
-      {"load", "loads[]", "Each entry of `loads`: a nodal force, the same on every selected node."},
+      {"load", "loads[]",
+       "Each entry of `loads`: a nodal force, the same on every selected node, or a pressure on "
+       "boundary faces."},
       {"constraint", "constraints[]",
        "Each entry of `constraints`: nodes held in place or moved by a prescribed displacement."},
       {"schedule", "schedule[]",
-       "Each event of `loads[].schedule` and `constraints[].schedule`. Values are linear between "
+       "Each event of `loads[].schedule`, `constraints[].schedule` and `obstacles[].motion`. "
+       "Values are linear between "
        "events, held before the first and after the last."},
+      {"pressure_cylinder", "loads[].cylinder",
+       "The faces of a pressure load whose rest centroid lies within `radius` of an infinite "
+       "line (the paper's cylinder-shaped endorectal-probe pressure)."},
+      {"scalar_schedule", "scalar_schedule[]",
+       "Each event of `loads[].pressure_schedule` and `objects[].target_volume`: a single "
+       "quantity in the unit of the scheduled field. Linear between events, held before the "
+       "first and after the last."},
+      {"obstacle", "obstacles[]",
+       "Each entry of `obstacles`: a rigid analytic shape the nodes may not enter (or, with "
+       "`keep_inside`, may not leave), enforced by projection after the prescribed "
+       "displacements and before the volume constraints."},
+      {"contact", "contacts[]",
+       "Each entry of `contacts`: two deformable objects that may touch but not interpenetrate "
+       "(frictionless, node against surface triangle)."},
       {"nodes", "nodes",
        "A node selector (`nodes:` of loads and constraints) is one of: omitted (all nodes), a "
        "node-set name of the generated mesh (`top`), an index list (`\"0-3,7\"`, `7`), a YAML "
@@ -104,6 +127,19 @@ std::vector<Parameter> scene_parameters() {
        .default_note = "none",
        .child = "link",
        .doc = "Doubled nodes: pairs of coincident nodes held together."},
+      {.section = "scene",
+       .name = "obstacles",
+       .kind = Kind::list,
+       .default_note = "none",
+       .child = "obstacle",
+       .doc = "Rigid analytic shapes (planes, spheres, capsules, probes) in contact with the "
+              "objects."},
+      {.section = "scene",
+       .name = "contacts",
+       .kind = Kind::list,
+       .default_note = "none",
+       .child = "contact",
+       .doc = "Pairs of deformable objects in contact with each other."},
       {.section = "scene",
        .name = "output",
        .kind = Kind::map,
@@ -219,6 +255,15 @@ std::vector<Parameter> object_parameters() {
        .kind = Kind::boolean,
        .default_value = "false",
        .doc = "Keep the volume enclosed by the boundary surface (elastic and active objects)."},
+      {.section = "object",
+       .name = "target_volume",
+       .kind = Kind::scalar_schedule,
+       .dimension = Dimension::volume,
+       .range = gt(0),
+       .default_note = "the rest volume",
+       .when = {kVolumeKept},
+       .doc = "Enclosed volume to keep: a constant, or a list of {t, value} events (bladder "
+              "filling)."},
       {.section = "object",
        .name = "motion",
        .kind = Kind::map,
@@ -396,9 +441,10 @@ std::vector<Parameter> load_parameters() {
       {.section = "load",
        .name = "type",
        .kind = Kind::choice,
-       .choices = {"force"},
+       .choices = {"force", "pressure"},
        .required = true,
-       .doc = "Kind of load."},
+       .doc = "`force`: the same force on every selected node; `pressure`: a follower pressure "
+              "on boundary faces, along minus their current outward normal."},
       {.section = "load",
        .name = "object",
        .kind = Kind::name,
@@ -408,19 +454,43 @@ std::vector<Parameter> load_parameters() {
        .name = "nodes",
        .kind = Kind::selector,
        .default_note = "all nodes",
-       .doc = "The loaded nodes (node selector)."},
+       .doc = "The loaded nodes (node selector); for a pressure, the boundary faces whose nodes "
+              "are all selected."},
       {.section = "load",
        .name = "force",
        .kind = Kind::vector,
        .dimension = Dimension::force,
+       .when = {kForce},
        .one_of = "value",
        .doc = "Constant force on each selected node."},
       {.section = "load",
        .name = "schedule",
        .kind = Kind::schedule,
        .dimension = Dimension::force,
+       .when = {kForce},
        .one_of = "value",
        .doc = "Force on each selected node over time: a list of {t, value} events."},
+      {.section = "load",
+       .name = "pressure",
+       .kind = Kind::quantity,
+       .dimension = Dimension::pressure,
+       .when = {kPressure},
+       .one_of = "pressure",
+       .doc = "Constant pressure; positive pushes into the body."},
+      {.section = "load",
+       .name = "pressure_schedule",
+       .kind = Kind::scalar_schedule,
+       .dimension = Dimension::pressure,
+       .when = {kPressure},
+       .one_of = "pressure",
+       .doc = "Pressure over time: a list of {t, value} events (or a constant)."},
+      {.section = "load",
+       .name = "cylinder",
+       .kind = Kind::map,
+       .default_note = "all faces",
+       .when = {kPressure},
+       .child = "pressure_cylinder",
+       .doc = "Only the faces inside a cylinder (with `nodes`: the faces selected by both)."},
   };
 }
 
@@ -624,6 +694,116 @@ std::vector<Parameter> component_parameters() {
   };
 }
 
+std::vector<Parameter> interaction_parameters() {
+  return {
+      {.section = "pressure_cylinder",
+       .name = "point",
+       .kind = Kind::vector,
+       .dimension = Dimension::length,
+       .required = true,
+       .doc = "A point of the cylinder's axis."},
+      {.section = "pressure_cylinder",
+       .name = "axis",
+       .kind = Kind::vector,
+       .required = true,
+       .doc = "Direction of the axis; any non-zero length."},
+      {.section = "pressure_cylinder",
+       .name = "radius",
+       .kind = Kind::quantity,
+       .dimension = Dimension::length,
+       .range = gt(0),
+       .required = true,
+       .doc = "Radius of the cylinder."},
+      {.section = "scalar_schedule",
+       .name = "t",
+       .kind = Kind::quantity,
+       .dimension = Dimension::time,
+       .range = ge(0),
+       .required = true,
+       .doc = "Event time; strictly increasing along the schedule."},
+      {.section = "scalar_schedule",
+       .name = "value",
+       .kind = Kind::quantity,
+       .required = true,
+       .doc = "Value at t, in the unit of the scheduled field (Pa for a pressure, m^3 for a "
+              "volume)."},
+      {.section = "obstacle",
+       .name = "name",
+       .kind = Kind::name,
+       .default_note = "`obstacle<index>`",
+       .doc = "Name of the obstacle's contact-force columns in monitors.csv."},
+      {.section = "obstacle",
+       .name = "shape",
+       .kind = Kind::choice,
+       .choices = {"plane", "sphere", "capsule", "probe"},
+       .required = true,
+       .doc = "`plane`: the half-space behind a plane; `sphere`; `capsule`: a segment with "
+              "radius (both ends rounded); `probe`: a rounded cylinder (an endorectal probe), "
+              "hemispherical tip, shaft without end behind it."},
+      {.section = "obstacle",
+       .name = "position",
+       .kind = Kind::vector,
+       .dimension = Dimension::length,
+       .required = true,
+       .doc = "At t = 0: a point of the plane; the sphere's centre; the capsule's first end "
+              "centre; the centre of the probe's tip."},
+      {.section = "obstacle",
+       .name = "axis",
+       .kind = Kind::vector,
+       .required = true,
+       .when = {kAxisShape},
+       .doc = "Plane: its normal, towards the free side; capsule: from the first end to the "
+              "second; probe: the direction it points to (from shaft to tip). Any non-zero "
+              "length."},
+      {.section = "obstacle",
+       .name = "radius",
+       .kind = Kind::quantity,
+       .dimension = Dimension::length,
+       .range = gt(0),
+       .required = true,
+       .when = {kRoundShape},
+       .doc = "Radius of the sphere, capsule or probe."},
+      {.section = "obstacle",
+       .name = "length",
+       .kind = Kind::quantity,
+       .dimension = Dimension::length,
+       .range = ge(0),
+       .required = true,
+       .when = {kCapsule},
+       .doc = "Distance between the centres of the capsule's two ends."},
+      {.section = "obstacle",
+       .name = "motion",
+       .kind = Kind::schedule,
+       .dimension = Dimension::length,
+       .default_note = "fixed",
+       .doc = "Translation of the shape from its position over time: a list of {t, value} "
+              "events."},
+      {.section = "obstacle",
+       .name = "keep_inside",
+       .kind = Kind::boolean,
+       .default_value = "false",
+       .doc = "A container instead of an obstacle: the nodes may not leave the shape."},
+      {.section = "obstacle",
+       .name = "objects",
+       .kind = Kind::names,
+       .range = ge(1),
+       .default_note = "all objects",
+       .doc = "Names of the objects whose nodes it acts on."},
+      {.section = "obstacle",
+       .name = "friction",
+       .kind = Kind::quantity,
+       .range = ge(0),
+       .default_value = "0",
+       .doc = "Coulomb friction coefficient between the shape and the nodes."},
+      {.section = "contact",
+       .name = "objects",
+       .kind = Kind::names,
+       .range = closed(2, 2),
+       .required = true,
+       .doc = "The two objects in contact (distinct)."},
+  };
+}
+
 std::vector<Parameter> output_parameters() {
   return {
       {.section = "output",
@@ -644,10 +824,10 @@ std::vector<Parameter> output_parameters() {
 const std::vector<Parameter>& parameters() {
   static const std::vector<Parameter> table = [] {
     std::vector<Parameter> all;
-    for (auto part :
-         {scene_parameters(), simulation_parameters(), object_parameters(), mesh_parameters(),
-          material_parameters(), load_parameters(), constraint_parameters(), schedule_parameters(),
-          selector_parameters(), output_parameters(), component_parameters()})
+    for (auto part : {scene_parameters(), simulation_parameters(), object_parameters(),
+                      mesh_parameters(), material_parameters(), load_parameters(),
+                      constraint_parameters(), schedule_parameters(), selector_parameters(),
+                      interaction_parameters(), output_parameters(), component_parameters()})
       all.insert(all.end(), part.begin(), part.end());
     return all;
   }();
@@ -722,6 +902,10 @@ std::string_view kind_name(Kind kind) {
       return "node selector";
     case Kind::schedule:
       return "schedule";
+    case Kind::scalar_schedule:
+      return "scalar schedule";
+    case Kind::names:
+      return "list of names";
     case Kind::list:
       return "list of maps";
     case Kind::map:

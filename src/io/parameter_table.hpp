@@ -14,19 +14,21 @@
 namespace phymul::io {
 
 enum class Kind {
-  quantity,        // number with an optional unit of `dimension`
-  vector,          // [x, y, z] of quantities, each with its own optional unit
-  integer,         // whole number
-  integer_vector,  // [x, y, z] of whole numbers
-  boolean,         // true | false
-  choice,          // one of `choices`
-  name,            // [A-Za-z0-9_-]+
-  axes,            // non-empty combination of x, y, z
-  selector,        // node selector: name, index list or {box|sphere|half_space: ...}
-  schedule,        // list of {t, value} events
-  list,            // list of maps, each described by section `child`
-  map,             // map described by section `child`
-  path,            // a file path, relative to the scene file's directory
+  quantity,         // number with an optional unit of `dimension`
+  vector,           // [x, y, z] of quantities, each with its own optional unit
+  integer,          // whole number
+  integer_vector,   // [x, y, z] of whole numbers
+  boolean,          // true | false
+  choice,           // one of `choices`
+  name,             // [A-Za-z0-9_-]+
+  axes,             // non-empty combination of x, y, z
+  selector,         // node selector: name, index list or {box|sphere|half_space: ...}
+  schedule,         // list of {t, value} events
+  scalar_schedule,  // list of {t, value} events with a single quantity each (range: of values)
+  names,            // list of object names (range: of the entry count)
+  list,             // list of maps, each described by section `child`
+  map,              // map described by section `child`
+  path,             // a file path, relative to the scene file's directory
 };
 
 // Allowed interval, applied to each component of vectors and to the entry count of lists.

@@ -39,6 +39,18 @@ ResultWriter::ResultWriter(std::filesystem::path dir, std::string stem, const Mo
   for (int c : closed_components_) header += ",volume_" + model.components[c].name + "_m3";
   for (const RigidBody& b : model.rigid_bodies)  // how far each rigid body has moved
     header += ",displacement_" + model.components[b.component].name + "_m";
+  // The force each obstacle exerts on the body, averaged over the last step (State).
+  for (size_t k = 0; k < model.obstacles.size(); ++k) {
+    const std::string& name = model.obstacles[k].name;
+    const std::string label = name.empty() ? fmt::format("obstacle{}", k) : name;
+    for (const char* axis : {"x", "y", "z"}) header += ",contact_" + label + '_' + axis + "_N";
+  }
+  // The force the second object of each contact pair exerts on the first.
+  for (const ContactPair& pair : model.contact_pairs) {
+    const std::string label = model.components[size_t(pair.components[0])].name + "_" +
+                              model.components[size_t(pair.components[1])].name;
+    for (const char* axis : {"x", "y", "z"}) header += ",contact_" + label + '_' + axis + "_N";
+  }
   write_monitors(header + '\n');
   const size_t n = model.rest_position.size() * 3;
   displacement_.resize(n);
@@ -73,6 +85,10 @@ void ResultWriter::monitor(Simulator& sim) {
   for (size_t b = 0; b < sim.model().rigid_bodies.size(); ++b)
     row += fmt::format(
         ",{}", (sim.state().bodies[b].center - sim.model().rigid_bodies[b].rest_center).norm());
+  for (const Vec3& f : sim.state().contact_force)
+    row += fmt::format(",{},{},{}", f.x(), f.y(), f.z());
+  for (const Vec3& f : sim.state().pair_contact_force)
+    row += fmt::format(",{},{},{}", f.x(), f.y(), f.z());
   write_monitors(row + '\n');
   monitored_time_ = sim.state().time;
 }

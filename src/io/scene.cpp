@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "io/parameter_table.hpp"
+#include "io/scene_interactions.hpp"
 #include "io/scene_reader.hpp"
 
 namespace phymul {
@@ -189,7 +190,7 @@ class SceneBuilder {
   MeshSpec mesh(SectionReader& reader);
   void check_mesh_source(SectionReader& reader);
   MaterialSpec material(SectionReader& reader);
-  LoadSpec load(SectionReader& reader);
+  void load(SectionReader& reader, Scene& scene);
   ConstraintSpec constraint(SectionReader& reader);
   LinkSpec link(SectionReader& reader);
   void object_kind(SectionReader& reader, ObjectSpec& spec,
@@ -213,10 +214,18 @@ Scene SceneBuilder::build(const YAML::Node& root, const std::string& file) {
   if (auto reader = top.map("simulation")) scene.simulation = simulation(*reader);
   top.items("objects", [&](SectionReader& r) { scene.objects.push_back(object(r)); });
   objects_ = scene.objects.size();
-  top.items("loads", [&](SectionReader& r) { scene.loads.push_back(load(r)); });
+  top.items("loads", [&](SectionReader& r) { load(r, scene); });
   top.items("constraints", [&](SectionReader& r) { scene.constraints.push_back(constraint(r)); });
   top.items("stitches", [&](SectionReader& r) { scene.stitches.push_back(link(r)); });
   top.items("doubled", [&](SectionReader& r) { scene.doubled.push_back(link(r)); });
+  std::vector<io::ObjectReference> interactions;
+  top.items("obstacles", [&](SectionReader& r) {
+    scene.obstacles.push_back(io::read_obstacle(r, interactions));
+  });
+  top.items("contacts",
+            [&](SectionReader& r) { scene.contacts.push_back(io::read_contact(r, interactions)); });
+  for (auto& reference : interactions)
+    references_.push_back({reference.name, reference.loc, reference.where});
   if (auto reader = top.map("output")) scene.output = output(*reader);
   top.done();
   check_names();
@@ -256,6 +265,7 @@ ObjectSpec SceneBuilder::object(SectionReader& reader) {
     stiffness_at = material_reader->value_loc("stiffness");
   }
   reader.read("volume_constraint", spec.volume_constraint);
+  reader.read_scalar("target_volume", spec.target_volume);
   object_kind(reader, spec, stiffness_at);
   reader.done();
   return spec;
@@ -399,18 +409,29 @@ void SceneBuilder::refer(SectionReader& reader, std::string& object) {
     references_.push_back({object, *reader.value_loc("object"), reader.where()});
 }
 
-LoadSpec SceneBuilder::load(SectionReader& reader) {
+// A nodal force or a pressure: every field is read whatever the type (the table's
+// conditions skip those that do not apply), then the entry goes to its list.
+void SceneBuilder::load(SectionReader& reader, Scene& scene) {
   LoadSpec spec;
   spec.loc = reader.loc();
   std::string type;
-  reader.read("type", type);  // "force" is the only kind; the table refuses others
+  reader.read("type", type);
   refer(reader, spec.object);
   reader.read("nodes", spec.nodes);
   Eigen::Vector3d force = Eigen::Vector3d::Zero();
   if (reader.read("force", force)) spec.force = Schedule::constant(force);
   reader.read("schedule", spec.force);
+  PressureSpec pressure;
+  io::read_pressure_fields(reader, pressure);
   reader.done();
-  return spec;
+  if (type == "pressure") {
+    pressure.object = spec.object;
+    pressure.nodes = spec.nodes;
+    pressure.loc = spec.loc;
+    scene.pressures.push_back(std::move(pressure));
+  } else {
+    scene.loads.push_back(std::move(spec));
+  }
 }
 
 ConstraintSpec SceneBuilder::constraint(SectionReader& reader) {

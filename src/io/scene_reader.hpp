@@ -58,6 +58,7 @@ class SectionReader {
 
   const SourceLoc& loc() const { return loc_; }
   const std::string& where() const { return where_; }
+  SceneContext& context() const { return *context_; }
   // Position of the value the scene gives for `name`, if any.
   std::optional<SourceLoc> value_loc(std::string_view name) const;
 
@@ -74,6 +75,11 @@ class SectionReader {
   bool read(std::string_view name, std::string& out);          // name or choice
   bool read(std::string_view name, NodeSelector& out);
   bool read(std::string_view name, Schedule& out);
+  // A scalar schedule (scene_reader_interactions.cpp): values in x, each checked against the
+  // field's range and in the field's unit.
+  bool read_scalar(std::string_view name, Schedule& out);
+  // A list of object names (scene_reader_interactions.cpp), with where each was written.
+  bool read(std::string_view name, std::vector<std::string>& out, std::vector<SourceLoc>& locs);
 
   template <class Enum>
   bool read(std::string_view name, Enum& out,
@@ -144,6 +150,7 @@ class SectionReader {
   bool read_sphere(SectionReader& sphere, NodeSelector& out);
   bool read_half_space(SectionReader& half_space, NodeSelector& out);
   bool read_events(const Value& value, Schedule& out);
+  bool read_scalar_events(const Value& value, Schedule& out);
   std::optional<Event> read_event(const Value& value, const YAML::Node& node,
                                   const std::string& label);
 

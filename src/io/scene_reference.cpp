@@ -46,6 +46,11 @@ std::string range_text(const Parameter& p) {
   if (p.kind == Kind::choice) return code_list(p.choices, ", ");
   if (p.range.unbounded()) return {};
   const std::string range = p.range.str();
+  if (p.kind == Kind::names && p.range.min && p.range.max && *p.range.min == *p.range.max)
+    return fmt::format("exactly {} entries", *p.range.min);
+  if (p.kind == Kind::names)
+    return fmt::format("at least {} entr{}", *p.range.min, *p.range.min == 1 ? "y" : "ies");
+  if (p.kind == Kind::scalar_schedule) return "each value " + range;
   if (p.kind == Kind::list)
     return fmt::format("at least {} entr{}", *p.range.min, *p.range.min == 1 ? "y" : "ies");
   if (p.kind == Kind::vector || p.kind == Kind::integer_vector) return "each " + range;

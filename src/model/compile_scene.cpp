@@ -9,6 +9,7 @@
 #include "io/mesh_file.hpp"
 #include "io/parameter_table.hpp"
 #include "io/units.hpp"
+#include "model/compile_interactions.hpp"
 #include "phymul/model.hpp"
 
 namespace phymul {
@@ -62,7 +63,10 @@ struct Compiler {
       }
       const int c = add_elastic_component(model, o.name, mesh, o.material);
       if (o.type == ObjectType::active) model.components[c].kind = ComponentKind::active;
-      if (o.volume_constraint) add_volume_constraint(model, c);
+      if (o.volume_constraint) {
+        add_volume_constraint(model, c);
+        model.volumes.back().target_schedule = o.target_volume;
+      }
     } catch (const std::exception& e) {
       const std::string what = e.what();
       const std::string prefix = fmt::format("object '{}'", o.name);
@@ -256,6 +260,9 @@ Model compile_scene(const Scene& scene) {
       if (!pairs.empty()) add_doubled_nodes(k.model, pairs);
     }
     add_fibres_of(k, scene);
+    compile_interactions(
+        scene, k.model, k.problems,
+        [&](const std::string& object, const NodeSelector& s) { return k.select(object, s); });
   }
   if (!k.problems.empty()) throw SceneError(std::move(k.problems));
   try {

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "constraints/doubled.hpp"
@@ -38,6 +39,17 @@ std::vector<double> node_masses(const std::string& name, const Mesh& mesh,
         fmt::format("object '{}': the material needs 'density' or 'mass'", name));
   }
   return share;
+}
+
+// Surfaces sharing a node disturb each other's projection: they need sweeps.
+void mark_coupled_volumes(Model& model) {
+  std::vector<char> seen(model.rest_position.size(), 0);
+  model.coupled_volumes = false;
+  for (const VolumeConstraint& c : model.volumes)
+    for (int i : c.nodes) {
+      if (seen[size_t(i)]) model.coupled_volumes = true;
+      seen[size_t(i)] = 1;
+    }
 }
 
 // Nodes, masses, cells, boundary and node sets of a component's mesh, appended to the model.
@@ -160,10 +172,33 @@ void add_rigid_obstacle(Model& model, RigidObstacle obstacle) {
       !(obstacle.length >= 0.0))
     throw std::invalid_argument(
         fmt::format("rigid obstacle: 'length' must be >= 0 m (got {})", obstacle.length));
-  if (obstacle.friction != 0.0)
-    throw std::invalid_argument(
-        "rigid obstacle: friction is not implemented yet; contact is frictionless (set 0)");
+  if (!(obstacle.friction >= 0.0) || !std::isfinite(obstacle.friction))
+    throw std::invalid_argument(fmt::format(
+        "rigid obstacle: 'friction' must be a finite value >= 0 (got {})", obstacle.friction));
   model.obstacles.push_back(std::move(obstacle));
+}
+
+void add_contact_pair(Model& model, int component_a, int component_b) {
+  const int count = int(model.components.size());
+  if (component_a < 0 || component_a >= count || component_b < 0 || component_b >= count ||
+      component_a == component_b)
+    throw std::invalid_argument(
+        fmt::format("contact: needs two distinct components out of {} (got {} and {})", count,
+                    component_a, component_b));
+  ContactPair pair;
+  pair.components = {component_a, component_b};
+  for (int side = 0; side < 2; ++side) {
+    const Component& c = model.components[size_t(pair.components[size_t(side)])];
+    if (c.boundary.empty())
+      throw std::invalid_argument(
+          fmt::format("contact: object '{}' has no closed boundary surface to touch with", c.name));
+    pair.faces[size_t(side)] = c.boundary;
+    std::vector<int>& nodes = pair.nodes[size_t(side)];
+    for (const Triangle& t : c.boundary) nodes.insert(nodes.end(), t.begin(), t.end());
+    std::sort(nodes.begin(), nodes.end());
+    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  }
+  model.contact_pairs.push_back(std::move(pair));
 }
 
 void finalize(Model& model) {
@@ -181,6 +216,7 @@ void finalize(Model& model) {
   // Rigid bodies first: a doubled group touching one moves with it.
   finalize_rigid_bodies(model);
   finalize_doubled(model);
+  mark_coupled_volumes(model);
 }
 
 State make_state(const Model& model) {
@@ -192,6 +228,8 @@ State make_state(const Model& model) {
   for (const ShapeMemory& m : model.shape_memory) memory_nodes += m.nodes.size();
   s.rotation.assign(memory_nodes, Eigen::Quaterniond::Identity());
   init_rigid_states(model, s);
+  s.contact_force.assign(model.obstacles.size(), Vec3::Zero());
+  s.pair_contact_force.assign(model.contact_pairs.size(), Vec3::Zero());
   return s;
 }
 

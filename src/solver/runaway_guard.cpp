@@ -21,18 +21,20 @@ std::vector<double> runaway_edges(const Model& model) {
 
 std::optional<Runaway> find_runaway(const Model& model, std::span<const double> edges,
                                     std::span<const Vec3> before, std::span<const Vec3> after) {
-  for (const Component& c : model.components) {
-    Vec3 mean = Vec3::Zero();
-    int counted = 0;
-    for (int i : c.nodes)
-      if (std::isfinite(edges[i])) mean += after[i] - before[i], ++counted;
-    if (counted == 0) continue;
-    mean /= double(counted);
-    for (int i : c.nodes) {
+  // Relative to the mean step of its own neighbours: rigid motion, a uniform inflation (a
+  // filling bladder) or a prescribed push move a node with its neighbourhood, the unstable
+  // mode against it.
+  for (const ShapeMemory& m : model.shape_memory)
+    for (int k = 0; k < int(m.nodes.size()); ++k) {
+      const int i = m.nodes[k];
+      if (!std::isfinite(edges[i])) continue;
+      const auto nb = m.neighbours.row(k);
+      Vec3 mean = Vec3::Zero();
+      for (int j : nb) mean += after[j] - before[j];
+      mean /= double(nb.size());
       const double moved = (after[i] - before[i] - mean).norm();
-      if (moved > kRunawayFraction * edges[i]) return Runaway{i, moved, edges[i]};
+      if (!(moved <= kRunawayFraction * edges[i])) return Runaway{i, moved, edges[i]};
     }
-  }
   return std::nullopt;
 }
 

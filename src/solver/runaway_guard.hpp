@@ -11,11 +11,12 @@ namespace phymul {
 
 // An unstable explicit scheme amplifies its highest-frequency mode, in which neighbouring
 // nodes move against each other, by a growing factor per step (about 34 at three times the
-// stable step). The guard flags the step in which a free node moves, relative to its
-// component's mean motion, more than kRunawayFraction of its shortest rest edge: a stable
-// run moves nodes a small fraction of an element per step, while past that fraction the
-// next step can already turn cells inside out.
-constexpr double kRunawayFraction = 0.5;
+// stable step). The guard flags the step in which a free node moves, relative to the mean
+// motion of its neighbours, more than kRunawayFraction of its shortest rest edge: its cells
+// are then inside out, and the growth makes the next step overflow. Legitimate violent runs
+// (a floppy membrane filled fast, a chamber squeezed) reach 1.3 edges; rigid motion and
+// uniform inflation move a node with its neighbours and count for nothing.
+constexpr double kRunawayFraction = 2.0;
 
 // Per node: its shortest rest edge (m) where the guard watches it (a node with a shape
 // memory, free on every axis), infinity elsewhere.
@@ -23,7 +24,7 @@ std::vector<double> runaway_edges(const Model& model);
 
 struct Runaway {
   int node;
-  double moved;  // m in one step, relative to the component's mean step
+  double moved;  // m in one step, relative to its neighbours' mean step
   double edge;   // m, the node's shortest rest edge
 };
 

@@ -7,6 +7,7 @@
 
 #include "constraints/constraints.hpp"
 #include "constraints/contact.hpp"
+#include "constraints/deformable_contact.hpp"
 #include "constraints/doubled.hpp"
 #include "forces/forces.hpp"
 #include "solver/rigid.hpp"
@@ -46,6 +47,13 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
   f_start_.assign(n, Vec3::Zero());
   scratch_.assign(n, Vec3::Zero());
   a1_.assign(n, Vec3::Zero());
+  touching_.assign(n, -1);
+  contact_impulse_.assign(model_.obstacles.size(), Vec3::Zero());
+  pair_impulse_.assign(model_.contact_pairs.size(), Vec3::Zero());
+  if (!model_.contact_pairs.empty()) {
+    deformable_ = std::make_shared<DeformableContactWorkspace>();
+    deformable_->prepare(model_);
+  }
   size_scale_ = bounding_diagonal(model_.rest_position);
   shortest_edge_ = runaway_edges(model_);
   const double stable = stable_time_step(model_);
@@ -97,16 +105,39 @@ void Simulator::step_verlet(double h, double load_time) {
     s.x[i] += h * (s.v[i] + 0.5 * h * a[i]);
   }
   drift_rigid_bodies(model_, s, h, load_time);
-  apply_position_constraints(model_, s.x, load_time, scratch_);
+  ContactStep contact = begin_contact_step(h);
+  apply_position_constraints(model_, s.x, load_time, scratch_, contact);
   for (int i = 0; i < model_.node_count(); ++i) s.v[i] = (s.x[i] - x_start_[i]) / h;
   compute_forces(model_, s, load_time);
   load_time_ = load_time;
   // The velocity projection below is linear: projecting the sum makes the kick tangent too.
   accelerations(a, /*tangent=*/false);
   for (int i = 0; i < model_.node_count(); ++i) s.v[i] += 0.5 * h * a[i];
+  apply_contact_velocities(model_, s.x, s.v, load_time, contact);
   project_volume_velocities(model_, s.x, s.v, scratch_);
   project_doubled(model_, s.v);
   kick_rigid_bodies(model_, s, h);
+  end_contact_step(h);
+}
+
+// The contact stages' bookkeeping; the shape's motion over the step runs from the load time
+// of the current forces (load_time_) to the new one.
+ContactStep Simulator::begin_contact_step(double dt) {
+  std::fill(touching_.begin(), touching_.end(), -1);
+  std::fill(contact_impulse_.begin(), contact_impulse_.end(), Vec3::Zero());
+  std::fill(pair_impulse_.begin(), pair_impulse_.end(), Vec3::Zero());
+  return ContactStep{x_start_,         load_time_,        dt,           touching_,
+                     contact_impulse_, deformable_.get(), pair_impulse_};
+}
+
+// Impulse over the step: the position stage's m dx / dt plus the velocity stage's m dv. At
+// rest on a surface both are m a dt / 2, so this is the static reaction exactly, and during
+// dynamics it is the mean contact force over the step (momentum balance).
+void Simulator::end_contact_step(double dt) {
+  for (size_t k = 0; k < contact_impulse_.size(); ++k)
+    state_.contact_force[k] = contact_impulse_[k] / dt;
+  for (size_t k = 0; k < pair_impulse_.size(); ++k)
+    state_.pair_contact_force[k] = pair_impulse_[k] / dt;
 }
 
 // Without their part along the volume gradients (the pressure the projection would undo
@@ -147,10 +178,13 @@ void Simulator::step_newton_cotes(double h, double load_time) {
     a1_[i] = s.x[i];  // spent: keep the unconstrained position instead
   }
   place_rigid_nodes(model_, s);
-  apply_position_constraints(model_, s.x, load_time, scratch_);
+  ContactStep contact = begin_contact_step(h);
+  apply_position_constraints(model_, s.x, load_time, scratch_, contact);
   for (int i = 0; i < n; ++i) s.v[i] += (s.x[i] - a1_[i]) / h;
+  apply_contact_velocities(model_, s.x, s.v, load_time, contact);
   project_volume_velocities(model_, s.x, s.v, scratch_);
   project_doubled(model_, s.v);
+  end_contact_step(h);
   compute_forces(model_, s, load_time);
   kick_rigid_bodies(model_, s, h);
   load_time_ = load_time;
@@ -199,19 +233,29 @@ double Simulator::max_residual_force() {
   for (int i = 0; i < model_.node_count(); ++i)
     r[i] = state_.f[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
   gather_doubled(model_, r);
-  for (const VolumeConstraint& c : model_.volumes) {
-    volume_gradient(c, state_.x, scratch_);
-    double rg = 0.0, gg = 0.0;
-    for (int i : c.nodes) {
-      scratch_[i] = scratch_[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
-      rg += r[i].dot(scratch_[i]);
-      gg += scratch_[i].squaredNorm();
+  // Surfaces sharing nodes: Gauss-Seidel sweeps until what is left to take out is far
+  // below the tolerance (one pass is exact for disjoint ones).
+  const int sweeps = model_.coupled_volumes ? 200 : 1;
+  for (int sweep = 0; sweep < sweeps; ++sweep) {
+    double largest_change = 0.0;
+    for (const VolumeConstraint& c : model_.volumes) {
+      volume_gradient(c, state_.x, scratch_);
+      double rg = 0.0, gg = 0.0, longest = 0.0;
+      for (int i : c.nodes) {
+        scratch_[i] = scratch_[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
+        rg += r[i].dot(scratch_[i]);
+        gg += scratch_[i].squaredNorm();
+        longest = std::max(longest, scratch_[i].norm());
+      }
+      if (gg == 0.0) continue;
+      const double pressure = rg / gg;  // the part of the force the constraint balances
+      for (int i : c.nodes) r[i] -= pressure * scratch_[i];
+      largest_change = std::max(largest_change, std::abs(pressure) * longest);
     }
-    if (gg == 0.0) continue;
-    const double pressure = rg / gg;  // the part of the force the constraint balances
-    for (int i : c.nodes) r[i] -= pressure * scratch_[i];
+    if (largest_change <= 1e-3 * model_.settings.tolerance) break;
   }
   remove_contact_forces(r);
+  if (deformable_) add_deformable_contact_forces(*deformable_, dt_, r);
   double largest = 0.0;
   for (int i = 0; i < model_.node_count(); ++i) largest = std::max(largest, r[i].norm());
   return std::max(largest, rigid_residual(model_, state_));
@@ -221,12 +265,19 @@ double Simulator::max_residual_force() {
 // residual is the contact's reaction, not an imbalance.
 void Simulator::remove_contact_forces(std::vector<Vec3>& r) const {
   constexpr double kTouching = 1e-12;  // m, as obstacle_force counts contact
+  // Touching: on the surface, or put on it by the last step's contact stage (the volume
+  // projection after it may have moved the node off by a hair).
   auto remove = [&](const RigidObstacle& o, int i) {
     const SurfaceDistance d = obstacle_distance(o, state_.x[i], load_time_);
-    if (std::abs(d.distance) > kTouching) return;
+    const bool moved = touching_[size_t(i)] == int(&o - model_.obstacles.data());
+    if (std::abs(d.distance) > kTouching && !moved) return;
     const Vec3 push = o.keep_inside ? Vec3(-d.normal) : d.normal;  // how the obstacle can push
     const double into = r[i].dot(push);
-    if (into < 0.0) r[i] -= into * push;
+    if (into >= 0.0) return;
+    r[i] -= into * push;
+    // Friction holds a tangential force up to mu times the normal one.
+    const double tangential = r[i].norm(), bound = -o.friction * into;
+    if (tangential > 0.0) r[i] *= tangential <= bound ? 0.0 : (tangential - bound) / tangential;
   };
   for (const RigidObstacle& o : model_.obstacles) {
     if (o.nodes.empty())
@@ -241,16 +292,24 @@ std::vector<Vec3> Simulator::support_reactions() const {
   // against the forces on the free axes (what max_residual_force takes out).
   std::vector<Vec3> reaction(state_.f);
   std::vector<Vec3> grad(state_.x.size(), Vec3::Zero());
-  for (const VolumeConstraint& c : model_.volumes) {
-    volume_gradient(c, state_.x, grad);
-    double fg = 0.0, gg = 0.0;
-    for (int i : c.nodes) {
-      const Vec3 free_grad = grad[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
-      fg += state_.f[i].dot(free_grad);
-      gg += free_grad.squaredNorm();
+  // Coupled surfaces: Gauss-Seidel sweeps, as in max_residual_force.
+  const int sweeps = model_.coupled_volumes ? 200 : 1;
+  for (int sweep = 0; sweep < sweeps; ++sweep) {
+    double largest_change = 0.0;
+    for (const VolumeConstraint& c : model_.volumes) {
+      volume_gradient(c, state_.x, grad);
+      double fg = 0.0, gg = 0.0, longest = 0.0;
+      for (int i : c.nodes) {
+        const Vec3 free_grad = grad[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
+        fg += reaction[i].dot(free_grad);
+        gg += free_grad.squaredNorm();
+        longest = std::max(longest, grad[i].norm());
+      }
+      if (gg == 0.0) continue;
+      for (int i : c.nodes) reaction[i] -= (fg / gg) * grad[i];
+      largest_change = std::max(largest_change, std::abs(fg / gg) * longest);
     }
-    if (gg == 0.0) continue;
-    for (int i : c.nodes) reaction[i] -= (fg / gg) * grad[i];
+    if (largest_change <= 1e-3 * model_.settings.tolerance) break;
   }
   for (int i = 0; i < model_.node_count(); ++i) {
     const Vec3 held = Vec3::Ones() - free_axes(model_.inverse_mass[i]);

@@ -115,7 +115,7 @@ TEST(ContactProjection, BuilderChecksItsInput) {
   bad_node.nodes = {8};
   EXPECT_THROW(add_rigid_obstacle(model, bad_node), std::invalid_argument);
   RigidObstacle rough = shape(Shape::plane, Vec3::Zero(), Vec3::UnitZ());
-  rough.friction = 0.3;
+  rough.friction = -0.3;
   EXPECT_THROW(add_rigid_obstacle(model, rough), std::invalid_argument);
   RigidObstacle tilted = shape(Shape::plane, Vec3::Zero(), Vec3::UnitZ());
   tilted.axis = Vec3(0, 0, 5);

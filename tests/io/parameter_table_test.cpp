@@ -83,7 +83,8 @@ TEST(ParameterTableTest, RangesAreWellFormed) {
     }
     const bool numeric = p.kind == Kind::quantity || p.kind == Kind::vector ||
                          p.kind == Kind::integer || p.kind == Kind::integer_vector ||
-                         p.kind == Kind::list;
+                         p.kind == Kind::list || p.kind == Kind::names ||
+                         p.kind == Kind::scalar_schedule;
     if (!numeric) {
       EXPECT_TRUE(p.range.unbounded()) << p.name;
     }

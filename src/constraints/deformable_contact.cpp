@@ -1,0 +1,218 @@
+#include "constraints/deformable_contact.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace phymul {
+
+Vec3 closest_barycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  // Ericson, Real-Time Collision Detection, 5.1.5: Voronoi regions of the triangle.
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return {1, 0, 0};
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0.0 && d4 <= d3) return {0, 1, 0};
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+    const double v = d1 / (d1 - d3);
+    return {1 - v, v, 0};
+  }
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0.0 && d5 <= d6) return {0, 0, 1};
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+    const double w = d2 / (d2 - d6);
+    return {1 - w, 0, w};
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return {0, 1 - w, w};
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  const double v = vb * denom, w = vc * denom;
+  return {1 - v - w, v, w};
+}
+
+namespace {
+
+double mean_edge(const std::vector<Triangle>& faces, const std::vector<Vec3>& x) {
+  double sum = 0.0;
+  for (const Triangle& t : faces)
+    sum += (x[t[1]] - x[t[0]]).norm() + (x[t[2]] - x[t[1]]).norm() + (x[t[0]] - x[t[2]]).norm();
+  return faces.empty() ? 0.0 : sum / (3.0 * double(faces.size()));
+}
+
+// Area-weighted vertex normals of a closed surface: a smooth outward field whose sign test
+// is right at edges and corners too, where a single face normal is not.
+void vertex_normals(const std::vector<Triangle>& faces, const std::vector<int>& nodes,
+                    std::span<const Vec3> x, std::vector<Vec3>& normal) {
+  for (int i : nodes) normal[size_t(i)].setZero();
+  for (const Triangle& t : faces) {
+    const Vec3 twice_area = (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]);
+    for (int i : t) normal[size_t(i)] += twice_area;
+  }
+  for (int i : nodes) normal[size_t(i)].normalize();
+}
+
+// What the position stage does with one node: is it inside, and where is it closest.
+struct Penetration {
+  double depth = 0.0;  // m, negative inside
+  int face = -1;
+  Vec3 weights = Vec3::Zero(), normal = Vec3::Zero();
+};
+
+Penetration find_penetration(const ContactPair& pair, int other, const TriangleHash& hash,
+                             const std::vector<Vec3>& vertex_normal, std::span<const Vec3> x,
+                             const Vec3& p, double margin) {
+  const std::vector<Triangle>& faces = pair.faces[size_t(other)];
+  double best = margin * margin;
+  Penetration found;
+  hash.around(p, [&](int k) {
+    const Triangle& t = faces[size_t(k)];
+    const Vec3 w = closest_barycentric(p, x[t[0]], x[t[1]], x[t[2]]);
+    const Vec3 q = w[0] * x[t[0]] + w[1] * x[t[1]] + w[2] * x[t[2]];
+    const double d2 = (p - q).squaredNorm();
+    if (d2 >= best) return;
+    best = d2;
+    found.face = k;
+    found.weights = w;
+  });
+  if (found.face < 0) return found;
+  const Triangle& t = faces[size_t(found.face)];
+  const Vec3& w = found.weights;
+  const Vec3 q = w[0] * x[t[0]] + w[1] * x[t[1]] + w[2] * x[t[2]];
+  const double distance = std::sqrt(best);
+  // Inside or outside: the sign along the interpolated vertex normal, right at edges and
+  // corners too. The push itself goes straight to the closest point (the gradient of the
+  // distance): a smoothed direction would not be normal to the surface, and its tangential
+  // part would make the node creep along the surface for ever.
+  const Vec3 smooth = w[0] * vertex_normal[size_t(t[0])] + w[1] * vertex_normal[size_t(t[1])] +
+                      w[2] * vertex_normal[size_t(t[2])];
+  if ((p - q).dot(smooth) >= 0.0 || distance == 0.0) {
+    found.depth = distance;  // outside, or exactly on the surface
+    return found;
+  }
+  found.depth = -distance;
+  found.normal = (q - p) / distance;
+  return found;
+}
+
+// n . (W n) for a per-axis inverse mass W.
+double along(const Vec3& inverse_mass, const Vec3& n) {
+  return n.dot(inverse_mass.cwiseProduct(n));
+}
+
+}  // namespace
+
+void DeformableContactWorkspace::prepare(const Model& model) {
+  hashes.resize(model.contact_pairs.size());
+  margin.assign(model.contact_pairs.size(), 0.0);
+  vertex_normal.assign(model.rest_position.size(), Vec3::Zero());
+  size_t capacity = 0;
+  for (size_t k = 0; k < model.contact_pairs.size(); ++k) {
+    const ContactPair& pair = model.contact_pairs[k];
+    for (int side = 0; side < 2; ++side) {
+      hashes[k][size_t(side)].reserve(pair.faces[size_t(side)].size());
+      capacity += pair.nodes[size_t(side)].size();
+    }
+    // Penetrations deeper than half a mean rest edge are not looked for: a step moves a node by
+    // far less than that in any stable run.
+    margin[k] = 0.5 * std::max(mean_edge(pair.faces[0], model.rest_position),
+                               mean_edge(pair.faces[1], model.rest_position));
+  }
+  records.assign(capacity * size_t(kSweeps), PairContact{});
+  count = 0;
+}
+
+void apply_deformable_contacts(const Model& model, std::span<Vec3> x,
+                               DeformableContactWorkspace& work, double dt,
+                               std::span<Vec3> pair_impulse) {
+  work.count = 0;
+  for (int sweep = 0; sweep < DeformableContactWorkspace::kSweeps; ++sweep) {
+    bool any = false;
+    for (size_t k = 0; k < model.contact_pairs.size(); ++k) {
+      const ContactPair& pair = model.contact_pairs[k];
+      for (int side = 0; side < 2; ++side) {
+        const int other = 1 - side;
+        TriangleHash& hash = work.hashes[k][size_t(other)];
+        hash.build(pair.faces[size_t(other)], x, work.margin[k]);
+        vertex_normals(pair.faces[size_t(other)], pair.nodes[size_t(other)], x, work.vertex_normal);
+        // Only nodes within reach of the other surface's box can be inside it: most are not.
+        Vec3 lo = x[size_t(pair.nodes[size_t(other)][0])], hi = lo;
+        for (int i : pair.nodes[size_t(other)])
+          lo = lo.cwiseMin(x[size_t(i)]), hi = hi.cwiseMax(x[size_t(i)]);
+        lo.array() -= work.margin[k];
+        hi.array() += work.margin[k];
+        for (int p : pair.nodes[size_t(side)]) {
+          if ((x[size_t(p)].array() < lo.array()).any() ||
+              (x[size_t(p)].array() > hi.array()).any())
+            continue;
+          const Penetration hit =
+              find_penetration(pair, other, hash, work.vertex_normal, x, x[p], work.margin[k]);
+          if (hit.face < 0 || hit.depth >= 0.0) continue;
+          const Triangle& t = pair.faces[size_t(other)][size_t(hit.face)];
+          const Vec3& n = hit.normal;
+          const Vec3& b = hit.weights;
+          double s = along(model.inverse_mass[size_t(p)], n);
+          for (int j = 0; j < 3; ++j) s += b[j] * b[j] * along(model.inverse_mass[size_t(t[j])], n);
+          if (s <= 0.0) continue;  // every node involved is held along n
+          // C = (p - sum b_j x_j) . n is linear in the positions for fixed b and n: this
+          // mass-weighted move brings it to zero exactly.
+          const double lambda = -hit.depth / s;
+          const Vec3 dp = lambda * model.inverse_mass[size_t(p)].cwiseProduct(n);
+          x[size_t(p)] += dp;
+          for (int j = 0; j < 3; ++j)
+            x[size_t(t[j])] -= lambda * b[j] * model.inverse_mass[size_t(t[j])].cwiseProduct(n);
+          // The multiplier is the impulse (times dt) on the node, and minus it on the triangle,
+          // whether or not their supports hold them.
+          pair_impulse[k] += (side == 0 ? lambda : -lambda) / dt * n;
+          if (work.count < work.records.size())
+            work.records[work.count++] = {int(k), side, p, t, b, n, lambda / dt};
+          any = true;
+        }
+      }
+    }
+    if (!any) return;
+  }
+}
+
+void apply_deformable_contact_velocities(const Model& model, std::span<Vec3> v,
+                                         DeformableContactWorkspace& work,
+                                         std::span<Vec3> pair_impulse) {
+  for (size_t r = 0; r < work.count; ++r) {
+    const PairContact& c = work.records[r];
+    const Vec3& n = c.normal;
+    const Vec3& b = c.weights;
+    Vec3 surface = Vec3::Zero();
+    for (int j = 0; j < 3; ++j) surface += b[j] * v[size_t(c.triangle[j])];
+    const double approach = (v[size_t(c.node)] - surface).dot(n);
+    if (approach >= 0.0) continue;
+    double s = along(model.inverse_mass[size_t(c.node)], n);
+    for (int j = 0; j < 3; ++j)
+      s += b[j] * b[j] * along(model.inverse_mass[size_t(c.triangle[j])], n);
+    if (s <= 0.0) continue;
+    const double lambda = -approach / s;
+    const Vec3 dv = lambda * model.inverse_mass[size_t(c.node)].cwiseProduct(n);
+    v[size_t(c.node)] += dv;
+    for (int j = 0; j < 3; ++j)
+      v[size_t(c.triangle[j])] -=
+          lambda * b[j] * model.inverse_mass[size_t(c.triangle[j])].cwiseProduct(n);
+    pair_impulse[size_t(c.pair)] += (c.side == 0 ? lambda : -lambda) * n;
+    work.records[r].impulse += lambda;
+  }
+}
+
+void add_deformable_contact_forces(const DeformableContactWorkspace& work, double dt,
+                                   std::span<Vec3> r) {
+  for (size_t k = 0; k < work.count; ++k) {
+    const PairContact& c = work.records[k];
+    const Vec3 f = c.impulse / dt * c.normal;
+    r[size_t(c.node)] += f;
+    for (int j = 0; j < 3; ++j) r[size_t(c.triangle[j])] -= c.weights[j] * f;
+  }
+}
+
+}  // namespace phymul
