@@ -79,27 +79,69 @@ Eigen::Matrix3d covariance_about(std::span<const int> nb, std::span<const Vec3> 
 
 namespace {
 
+// tr(S) I - S for the symmetric part of S: the Hessian of -trace(R^T A) in the body frame.
+Eigen::Matrix3d rotation_hessian(const Eigen::Matrix3d& S) {
+  const Eigen::Matrix3d Ss = 0.5 * (S + S.transpose());
+  return Ss.trace() * Eigen::Matrix3d::Identity() - Ss;
+}
+
+Vec3 axial_of_skew(const Eigen::Matrix3d& S) {
+  return Vec3(0.5 * (S(2, 1) - S(1, 2)), 0.5 * (S(0, 2) - S(2, 0)), 0.5 * (S(1, 0) - S(0, 1)));
+}
+
+// Solves M y = b for a symmetric 3x3 M by its adjugate, when M is safely positive
+// definite (Sylvester's criterion, and a determinant not negligible against its scale);
+// an LLT or a pow() here cost a fifth of a step.
+bool solve_positive_definite(const Eigen::Matrix3d& M, const Vec3& b, Vec3& y) {
+  const double c00 = M(1, 1) * M(2, 2) - M(1, 2) * M(1, 2);
+  const double c01 = M(0, 2) * M(1, 2) - M(0, 1) * M(2, 2);
+  const double c02 = M(0, 1) * M(1, 2) - M(0, 2) * M(1, 1);
+  const double det = M(0, 0) * c00 + M(0, 1) * c01 + M(0, 2) * c02;
+  const double scale = M.trace() / 3.0;
+  if (!(M(0, 0) > 0.0 && M(0, 0) * M(1, 1) > M(0, 1) * M(0, 1) &&
+        det > 1e-6 * scale * scale * scale))
+    return false;
+  const double c11 = M(0, 0) * M(2, 2) - M(0, 2) * M(0, 2);
+  const double c12 = M(0, 1) * M(0, 2) - M(0, 0) * M(1, 2);
+  const double c22 = M(0, 0) * M(1, 1) - M(0, 1) * M(0, 1);
+  y = Vec3(c00 * b(0) + c01 * b(1) + c02 * b(2), c01 * b(0) + c11 * b(1) + c12 * b(2),
+           c02 * b(0) + c12 * b(1) + c22 * b(2)) /
+      det;
+  return true;
+}
+
+// q turned by the body-frame rotation vector theta. Below 1e-4 rad the unnormalised
+// quaternion (1, theta/2) turns by theta to 1e-13 relative, without sin and cos.
+void turn(Eigen::Quaterniond& q, const Vec3& theta, double angle) {
+  if (angle < 1e-4)
+    q = q * Eigen::Quaterniond(1.0, 0.5 * theta(0), 0.5 * theta(1), 0.5 * theta(2));
+  else
+    q = q * Eigen::Quaterniond(Eigen::AngleAxisd(std::min(angle, 1.0), theta / angle));
+  q.normalize();
+}
+
+struct Turn {
+  double angle = 0.0;  // rad
+  bool newton = false;
+};
+
 // Turns q towards the maximiser of trace(R^T A). Near the optimum a Newton step on the
 // symmetry condition skew(R^T A) = 0 (quadratic); elsewhere, or when tr(S) I - S is not
 // positive definite, the step of Mueller et al. (2016) (linear, but always ascending).
-// Returns the angle turned (rad).
-double rotation_iteration(const Eigen::Matrix3d& A, Eigen::Quaterniond& q) {
-  const Eigen::Matrix3d R = q.toRotationMatrix();
-  const Eigen::Matrix3d S = R.transpose() * A;
-  const Vec3 w(0.5 * (S(2, 1) - S(1, 2)), 0.5 * (S(0, 2) - S(2, 0)), 0.5 * (S(1, 0) - S(0, 1)));
-  const Eigen::Matrix3d Ss = 0.5 * (S + S.transpose());
-  const Eigen::Matrix3d M = Ss.trace() * Eigen::Matrix3d::Identity() - Ss;
+Turn rotation_iteration(const Eigen::Matrix3d& A, Eigen::Quaterniond& q) {
+  const Eigen::Matrix3d S = q.toRotationMatrix().transpose() * A;
+  const Vec3 w = axial_of_skew(S);
+  Turn result;
   Vec3 theta;  // body-frame turn
-  const Eigen::LLT<Eigen::Matrix3d> llt(M);
-  if (llt.info() == Eigen::Success && M.determinant() > 1e-6 * std::pow(M.trace() / 3.0, 3))
-    theta = 2.0 * llt.solve(w);
+  result.newton = solve_positive_definite(rotation_hessian(S), w, theta);
+  if (result.newton)
+    theta *= 2.0;
   else
     theta = 2.0 * w / std::max(std::abs(S.trace()), 1e-300);
-  const double angle = theta.norm();
-  if (angle == 0.0 || !std::isfinite(angle)) return 0.0;
-  q = q * Eigen::Quaterniond(Eigen::AngleAxisd(std::min(angle, 1.0), theta / angle));
-  q.normalize();
-  return angle;
+  result.angle = theta.norm();
+  if (result.angle == 0.0 || !std::isfinite(result.angle)) return {0.0, result.newton};
+  turn(q, theta, result.angle);
+  return result;
 }
 
 // The proper rotation nearest to A (Kabsch): a cold start far from the warm one.
@@ -121,10 +163,18 @@ Fit fit_neighbourhood(const ShapeMemory& m, int k, std::span<const Vec3> rest,
                       std::span<const Vec3> x) {
   const auto nb = m.neighbours.row(k);
   Fit fit;
-  fit.g = centroid(nb, x);
-  fit.A.setZero();
+  // One pass: sum (x_j - g) c_j^T = sum (x_j - o) c_j^T for any origin o since the rest
+  // offsets c_j sum to zero; o = x_i keeps the differences small.
+  const Vec3& o = x[m.nodes[k]];
   const Vec3& G0 = m.rest_centroid[k];
-  for (int j : nb) fit.A += (x[j] - fit.g) * (rest[j] - G0).transpose();
+  Vec3 sum = Vec3::Zero();
+  fit.A.setZero();
+  for (int j : nb) {
+    const Vec3 d = x[j] - o;
+    sum += d;
+    fit.A.noalias() += d * (rest[j] - G0).transpose();
+  }
+  fit.g = o + sum / double(nb.size());
   if (m.normal_weight[k] > 0.0) {
     fit.N = neighbourhood_normal(m, k, x, fit.g);
     fit.A += m.normal_weight[k] * fit.N.normalized() * m.rest_normal[k].transpose();
@@ -140,11 +190,11 @@ void add_rotation_reaction(const ShapeMemory& m, int k, std::span<const Vec3> re
                            std::span<const Vec3> x, const Fit& fit, const Eigen::Matrix3d& R,
                            const Vec3& pull, std::span<Vec3> f) {
   const auto nb = m.neighbours.row(k);
-  Eigen::Matrix3d S = R.transpose() * fit.A;
-  S = 0.5 * (S + S.transpose());
-  const Eigen::Matrix3d M = S.trace() * Eigen::Matrix3d::Identity() - S;
+  const Eigen::Matrix3d M = rotation_hessian(R.transpose() * fit.A);
   const Vec3 p = m.stiffness * m.rest_offset[k].cross(R.transpose() * pull);  // dE = p.theta
-  const Vec3 mu = 2.0 * M.inverse() * p;
+  Vec3 mu;
+  if (!solve_positive_definite(M, p, mu)) mu = M.inverse() * p;
+  mu *= 2.0;
   const Vec3& G0 = m.rest_centroid[k];
   for (int j : nb) f[j] -= 0.5 * R * mu.cross(rest[j] - G0);
   if (m.normal_weight[k] <= 0.0) return;
@@ -172,13 +222,15 @@ void add_rotation_reaction(const ShapeMemory& m, int k, std::span<const Vec3> re
 }  // namespace
 
 void extract_rotation(const Eigen::Matrix3d& A, Eigen::Quaterniond& q, int max_iterations) {
-  // Converged once a turn is below 1e-14 rad: forces then sit at round-off. A warm start
-  // needs one or two iterations; a start far away restarts from an SVD.
+  // Converged once a turn is below 1e-14 rad, or after a Newton turn below 1e-8 rad (the
+  // next would be of its square): forces then sit at round-off. A warm start needs one
+  // iteration; a start far away restarts from an SVD.
+  auto converged = [](const Turn& t) { return t.angle < 1e-14 || (t.newton && t.angle < 1e-8); };
   for (int it = 0; it < max_iterations; ++it)
-    if (rotation_iteration(A, q) < 1e-14) return;
+    if (converged(rotation_iteration(A, q))) return;
   q = nearest_rotation(A);
   for (int it = 0; it < max_iterations; ++it)
-    if (rotation_iteration(A, q) < 1e-14) return;
+    if (converged(rotation_iteration(A, q))) return;
 }
 
 ShapeMemory build_shape_memory(const std::string& component, const Mesh& mesh, int first_node,
