@@ -31,6 +31,13 @@ struct ShapeMemory {
   // orthogonal pair at rest. Used by the `frame` mode and for flat interior normals.
   std::vector<std::array<int, 2>> frame_pair;
   bool surface = false;  // neighbours are ordered rings (normal from the ring)
+  // Parallel plan (plan_blocks): memory nodes k in contiguous blocks; the blocks of one colour
+  // write disjoint nodes (each node and its neighbours), so a colour runs in parallel and
+  // every force is summed in one order whatever the number of threads.
+  std::vector<int> block_start;              // k ranges, blocks + 1 entries
+  std::vector<int> colour_start;             // ranges of colour_blocks, colours + 1 entries
+  std::vector<int> colour_blocks;            // block ids, by colour
+  mutable std::vector<double> block_energy;  // scratch of each force pass, J per block
 };
 
 // Constant enclosed volume of a closed, outward-oriented surface (DESIGN 2.2).

@@ -6,7 +6,9 @@
 namespace phymul {
 
 void compute_forces(const Model& model, State& s, double load_time) {
-  for (int i = 0; i < model.node_count(); ++i) s.f[i] = model.mass[i] * model.gravity;
+  const int n = model.node_count();
+#pragma omp parallel for schedule(static) if (n >= 4096)
+  for (int i = 0; i < n; ++i) s.f[i] = model.mass[i] * model.gravity;
   for (const AppliedForce& load : model.forces) {
     const Vec3 fi = load.force.at(load_time);
     for (int i : load.nodes) s.f[i] += fi;

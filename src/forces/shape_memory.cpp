@@ -275,6 +275,7 @@ ShapeMemory build_shape_memory(const std::string& component, const Mesh& mesh, i
         m.frame == FrameMode::frame ? local_frame(m, k, rest, G0) : Eigen::Matrix3d::Identity();
     m.rest_offset.push_back(R0.transpose() * (rest[first_node + i] - G0));
   }
+  plan_blocks(m);
   return m;
 }
 
@@ -297,36 +298,54 @@ void add_centroid_reaction(std::span<const int> nb, const Vec3& fi, std::span<Ve
   for (int j : nb) f[j] -= share;
 }
 
+// Runs node_force(k) (which returns node k's energy) over every memory node, colour by
+// colour; the blocks of a colour in parallel. Energies are summed in block order.
+template <class NodeForce>
+double for_each_memory_node(const ShapeMemory& m, NodeForce&& node_force) {
+  constexpr size_t kParallelFrom = 2048;  // below, a thread team costs more than it saves
+  const int colours = int(m.colour_start.size()) - 1;
+#pragma omp parallel if (m.nodes.size() >= kParallelFrom)
+  for (int c = 0; c < colours; ++c) {
+#pragma omp for schedule(static)
+    for (int index = m.colour_start[c]; index < m.colour_start[c + 1]; ++index) {
+      const int b = m.colour_blocks[index];
+      double energy = 0.0;
+      for (int k = m.block_start[b]; k < m.block_start[b + 1]; ++k) energy += node_force(k);
+      m.block_energy[b] = energy;
+    }
+  }
+  double energy = 0.0;
+  for (double e : m.block_energy) energy += e;
+  return energy;
+}
+
 double add_polar_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::span<const Vec3> x,
                         std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f) {
-  double energy = 0.0;
-  for (int k = 0; k < int(m.nodes.size()); ++k) {
+  return for_each_memory_node(m, [&](int k) {
     const int i = m.nodes[k];
     const Fit fit = fit_neighbourhood(m, k, rest, x);
     extract_rotation(fit.A, rotations[k]);
     const Eigen::Matrix3d R = rotations[k].toRotationMatrix();
     const Vec3 pull = fit.g + R * m.rest_offset[k] - x[i];
     f[i] += m.stiffness * pull;
-    energy += 0.5 * m.stiffness * pull.squaredNorm();
-    if (!m.reaction) continue;
-    // -dE/dx through g and through R: the forces are then exactly the energy's gradient.
-    add_centroid_reaction(m.neighbours.row(k), m.stiffness * pull, f);
-    add_rotation_reaction(m, k, rest, x, fit, R, pull, f);
-  }
-  return energy;
+    if (m.reaction) {
+      // -dE/dx through g and through R: the forces are then exactly the energy's gradient.
+      add_centroid_reaction(m.neighbours.row(k), m.stiffness * pull, f);
+      add_rotation_reaction(m, k, rest, x, fit, R, pull, f);
+    }
+    return 0.5 * m.stiffness * pull.squaredNorm();
+  });
 }
 
 double add_frame_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::span<const Vec3> x,
                         std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f) {
-  double energy = 0.0;
-  for (int k = 0; k < int(m.nodes.size()); ++k) {
+  return for_each_memory_node(m, [&](int k) {
     const int i = m.nodes[k];
     const Vec3 pull = attraction_position(m, k, rest, x, rotations[k]) - x[i];
     f[i] += m.stiffness * pull;
-    energy += 0.5 * m.stiffness * pull.squaredNorm();
     if (m.reaction) add_centroid_reaction(m.neighbours.row(k), m.stiffness * pull, f);
-  }
-  return energy;
+    return 0.5 * m.stiffness * pull.squaredNorm();
+  });
 }
 
 }  // namespace

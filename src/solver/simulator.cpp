@@ -11,6 +11,9 @@
 namespace phymul {
 namespace {
 
+// Below this many nodes a thread team costs more than a per-node loop saves.
+constexpr int kParallelFrom = 4096;
+
 Vec3 free_axes(const Vec3& inverse_mass) {
   return (inverse_mass.array() > 0.0).cast<double>().matrix();
 }
@@ -66,17 +69,21 @@ void Simulator::step_verlet(double h, double load_time) {
   State& s = state_;
   std::vector<Vec3>& a = f_start_;  // accelerations, tangent to the volume constraints
   accelerations(a);
-  for (int i = 0; i < model_.node_count(); ++i) {
+  const int n = model_.node_count();
+#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
+  for (int i = 0; i < n; ++i) {
     x_start_[i] = s.x[i];
     s.x[i] += h * (s.v[i] + 0.5 * h * a[i]);
   }
   apply_position_constraints(model_, s.x, load_time, scratch_);
-  for (int i = 0; i < model_.node_count(); ++i) s.v[i] = (s.x[i] - x_start_[i]) / h;
+#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
+  for (int i = 0; i < n; ++i) s.v[i] = (s.x[i] - x_start_[i]) / h;
   compute_forces(model_, s, load_time);
   load_time_ = load_time;
   // The velocity projection below is linear: projecting the sum makes the kick tangent too.
   accelerations(a, /*tangent=*/false);
-  for (int i = 0; i < model_.node_count(); ++i) s.v[i] += 0.5 * h * a[i];
+#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
+  for (int i = 0; i < n; ++i) s.v[i] += 0.5 * h * a[i];
   project_volume_velocities(model_, s.x, s.v, scratch_);
 }
 
@@ -85,7 +92,9 @@ void Simulator::step_verlet(double h, double load_time) {
 // second-order terms, and relaxation converges instead of stalling on that round trip.
 void Simulator::accelerations(std::vector<Vec3>& a, bool tangent) {
   const double c = model_.damping;
-  for (int i = 0; i < model_.node_count(); ++i)
+  const int n = model_.node_count();
+#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
+  for (int i = 0; i < n; ++i)
     a[i] = model_.inverse_mass[i].cwiseProduct(state_.f[i]) -
            c * state_.v[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
   if (tangent) project_volume_velocities(model_, state_.x, a, scratch_);
@@ -121,7 +130,16 @@ void Simulator::step_newton_cotes(double h, double load_time) {
 
 void Simulator::check_stability() const {
   const State& s = state_;
-  for (int i = 0; i < model_.node_count(); ++i) {
+  const int n = model_.node_count();
+  bool all_well = true;  // a parallel look first; the first bad node is then found in order
+#pragma omp parallel for schedule(static) if (n >= kParallelFrom) reduction(&& : all_well)
+  for (int i = 0; i < n; ++i) {
+    const double moved = (s.x[i] - model_.rest_position[i]).norm();
+    all_well =
+        all_well && std::isfinite(moved) && s.v[i].allFinite() && moved <= 10.0 * size_scale_;
+  }
+  if (all_well) return;
+  for (int i = 0; i < n; ++i) {
     const double moved = (s.x[i] - model_.rest_position[i]).norm();
     const bool finite = std::isfinite(moved) && s.v[i].allFinite();
     if (finite && moved <= 10.0 * size_scale_) continue;
