@@ -53,6 +53,7 @@ struct SimulationSpec {
   long max_iterations = 1000000;  // static mode
   int load_steps = 1;             // static mode: equilibria at duration * k / load_steps
   bool kinetic_damping = true;    // static mode: zero velocities at kinetic-energy peaks
+  bool relaxation_mass_scaling = true;  // static mode: fictitious masses (Simulator)
   SourceLoc loc;
 };
 

@@ -23,6 +23,8 @@ class InstabilityError : public std::runtime_error {
 // bound on the shape-memory stiffness over the node masses (undamped central difference
 // limit 2/omega_max).
 double stable_time_step(const Model& model);
+// Per node, the Gershgorin row sum (N/m) of the shape-memory stiffness behind that bound.
+std::vector<double> stiffness_row_sums(const Model& model);
 
 struct StaticResult {
   bool converged = false;
@@ -45,7 +47,11 @@ class Simulator {
   // Relax to equilibrium with the loads of load_time (s); stops when the largest free
   // residual force is below the scene's tolerance or after max_iterations.
   StaticResult relax(double load_time, long max_iterations,
-                     const std::function<void(long, double)>& progress = {});
+                     const std::function<void(long, double)>& progress, double tolerance);
+  StaticResult relax(double load_time, long max_iterations,
+                     const std::function<void(long, double)>& progress = {}) {
+    return relax(load_time, max_iterations, progress, model_.settings.tolerance);
+  }
   // The scene's static mode: load steps up to the scene's duration.
   StaticResult solve_static(const std::function<void(long, double)>& progress = {});
 
@@ -66,6 +72,7 @@ class Simulator {
   void check_stability() const;
   void accelerations(std::vector<Vec3>& a, bool tangent = true);
   void remove_contact_forces(std::vector<Vec3>& r) const;
+  void scale_masses_for_relaxation();
 
   Model model_;
   State state_;
@@ -74,6 +81,9 @@ class Simulator {
   // Sized once: no allocation in a step.
   std::vector<Vec3> x_start_, v_start_, f_start_, a1_, scratch_;
   double size_scale_ = 1.0;  // m, diagonal of the rest bounding box
+  // Inertia of each node in the pseudo-dynamics: its mass, or in static mode a fictitious
+  // mass that gives every node the same Gershgorin frequency.
+  std::vector<double> inertia_;
 };
 
 }  // namespace phymul

@@ -6,7 +6,7 @@
 
 namespace phymul {
 
-double stable_time_step(const Model& model) {
+std::vector<double> stiffness_row_sums(const Model& model) {
   // Row sums of |df/dx| per node (rotation terms neglected): a node's own pull K(a - x)
   // gives K on itself and K/n on each of its n neighbours; with the reaction option each
   // node it neighbours adds its own row share 2K/n.
@@ -19,6 +19,11 @@ double stable_time_step(const Model& model) {
       for (int j : nb) row[j] += 2.0 * m.stiffness / double(nb.size());
     }
   }
+  return row;
+}
+
+double stable_time_step(const Model& model) {
+  const std::vector<double> row = stiffness_row_sums(model);
   double omega2 = 0.0;
   for (int i = 0; i < model.node_count(); ++i) omega2 = std::max(omega2, row[i] / model.mass[i]);
   if (omega2 == 0.0) return std::numeric_limits<double>::infinity();
