@@ -21,12 +21,10 @@ struct ShapeMemory {
   bool reaction = true;             // spread -f/n over the neighbours so momentum is kept
   std::vector<int> nodes;           // global ids of the nodes that carry a memory
   Adjacency neighbours;             // per memory node, global ids; the ordered one-ring on surfaces
-  std::vector<Vec3> rest_offset;    // c = R0^T (X - G0), m
-  std::vector<Vec3> rest_centroid;  // G0, m
+  std::vector<Vec3> rest_offset;    // c = R0^T (X - G0), m; G0 the rest centroid
   // Planar neighbourhoods (every surface node, flat interior ones) leave the best-fit
   // rotation free about their normal: such nodes add the normal pair with this weight (m^2).
-  std::vector<double> normal_weight;
-  std::vector<Vec3> rest_normal;  // unit n0 of those nodes (zero for the others)
+  std::vector<double> normal_weight;  // zero for the others
   // Two neighbours (positions within the row) spanning the node's frame: the most
   // orthogonal pair at rest. Used by the `frame` mode and for flat interior normals.
   std::vector<std::array<int, 2>> frame_pair;

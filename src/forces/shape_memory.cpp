@@ -154,30 +154,38 @@ Eigen::Quaterniond nearest_rotation(const Eigen::Matrix3d& A) {
 
 // What the polar fit of a neighbourhood needs, computed once per node and step.
 struct Fit {
-  Vec3 g;                 // current centroid of the neighbours
-  Eigen::Matrix3d A;      // sum (x_j - g)(X_j - G0)^T (+ the normal pair)
-  Vec3 N = Vec3::Zero();  // unnormalised current normal of a flat neighbourhood
+  Vec3 g;                  // current centroid of the neighbours
+  Vec3 G0;                 // rest centroid of the neighbours
+  Eigen::Matrix3d A;       // sum (x_j - g)(X_j - G0)^T (+ the normal pair)
+  Vec3 N = Vec3::Zero();   // unnormalised current normal of a flat neighbourhood
+  Vec3 n0 = Vec3::Zero();  // unit rest normal of a flat neighbourhood
 };
 
+// The rest centroid and rest normal are recomputed rather than stored: 48 bytes a node less,
+// for a few additions on data the pass reads anyway.
 Fit fit_neighbourhood(const ShapeMemory& m, int k, std::span<const Vec3> rest,
                       std::span<const Vec3> x) {
   const auto nb = m.neighbours.row(k);
-  Fit fit;
-  // One pass: sum (x_j - g) c_j^T = sum (x_j - o) c_j^T for any origin o since the rest
-  // offsets c_j sum to zero; o = x_i keeps the differences small.
-  const Vec3& o = x[m.nodes[k]];
-  const Vec3& G0 = m.rest_centroid[k];
-  Vec3 sum = Vec3::Zero();
-  fit.A.setZero();
+  const int i = m.nodes[k];
+  // One pass, about the node itself (small differences, no cancellation):
+  // sum (x_j - g)(X_j - G0)^T = sum d_j r_j^T - (sum d_j) mean(r)^T.
+  Vec3 sum_d = Vec3::Zero(), sum_r = Vec3::Zero();
+  Eigen::Matrix3d P = Eigen::Matrix3d::Zero();
   for (int j : nb) {
-    const Vec3 d = x[j] - o;
-    sum += d;
-    fit.A.noalias() += d * (rest[j] - G0).transpose();
+    const Vec3 d = x[j] - x[i], r = rest[j] - rest[i];
+    sum_d += d;
+    sum_r += r;
+    P.noalias() += d * r.transpose();
   }
-  fit.g = o + sum / double(nb.size());
+  const double count = double(nb.size());
+  Fit fit;
+  fit.g = x[i] + sum_d / count;
+  fit.G0 = rest[i] + sum_r / count;
+  fit.A = P - sum_d * (sum_r / count).transpose();
   if (m.normal_weight[k] > 0.0) {
     fit.N = neighbourhood_normal(m, k, x, fit.g);
-    fit.A += m.normal_weight[k] * fit.N.normalized() * m.rest_normal[k].transpose();
+    fit.n0 = neighbourhood_normal(m, k, rest, fit.G0).normalized();
+    fit.A += m.normal_weight[k] * fit.N.normalized() * fit.n0.transpose();
   }
   return fit;
 }
@@ -195,12 +203,11 @@ void add_rotation_reaction(const ShapeMemory& m, int k, std::span<const Vec3> re
   Vec3 mu;
   if (!solve_positive_definite(M, p, mu)) mu = M.inverse() * p;
   mu *= 2.0;
-  const Vec3& G0 = m.rest_centroid[k];
-  for (int j : nb) f[j] -= 0.5 * R * mu.cross(rest[j] - G0);
+  for (int j : nb) f[j] -= 0.5 * R * mu.cross(rest[j] - fit.G0);
   if (m.normal_weight[k] <= 0.0) return;
   // The normal pair: dE = h'.dN, N the unnormalised neighbourhood normal.
   const Vec3 n = fit.N.normalized();
-  const Vec3 h = 0.5 * m.normal_weight[k] * R * mu.cross(m.rest_normal[k]);
+  const Vec3 h = 0.5 * m.normal_weight[k] * R * mu.cross(fit.n0);
   const Vec3 hp = (h - n.dot(h) * n) / fit.N.norm();
   const int count = int(nb.size());
   if (m.surface) {  // N = sum of e_k x e_k+1 around the ring: the centroid terms cancel
@@ -265,10 +272,6 @@ ShapeMemory build_shape_memory(const std::string& component, const Mesh& mesh, i
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
     const bool flat = eig.eigenvalues()(0) < 1e-2 * eig.eigenvalues()(2);
     m.normal_weight.push_back(m.surface || flat ? C.trace() / double(nb.size()) : 0.0);
-    m.rest_centroid.push_back(G0);
-    m.rest_normal.push_back(m.normal_weight.back() > 0.0
-                                ? neighbourhood_normal(m, k, rest, G0).normalized()
-                                : Vec3::Zero());
 
     // In polar mode the rest frame is the identity by construction (A0 is symmetric).
     const Eigen::Matrix3d R0 =

@@ -40,10 +40,12 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
   state_ = make_state(model_);
   const size_t n = model_.rest_position.size();
   x_start_.assign(n, Vec3::Zero());
-  v_start_.assign(n, Vec3::Zero());
+  if (model_.settings.integrator == Integrator::newton_cotes) {  // only it needs them
+    v_start_.assign(n, Vec3::Zero());
+    a1_.assign(n, Vec3::Zero());
+  }
   f_start_.assign(n, Vec3::Zero());
   scratch_.assign(n, Vec3::Zero());
-  a1_.assign(n, Vec3::Zero());
   size_scale_ = bounding_diagonal(model_.rest_position);
   inertia_ = model_.mass;
   if (model_.settings.mode == SolveMode::static_equilibrium &&
@@ -184,8 +186,7 @@ void Simulator::check_stability() const {
 
 double Simulator::kinetic_energy() const {
   double e = 0.0;
-  for (int i = 0; i < model_.node_count(); ++i)
-    e += 0.5 * inertia_[i] * state_.v[i].squaredNorm();
+  for (int i = 0; i < model_.node_count(); ++i) e += 0.5 * inertia_[i] * state_.v[i].squaredNorm();
   return e;
 }
 
@@ -262,8 +263,7 @@ std::vector<double> Simulator::component_volumes() const {
 }
 
 StaticResult Simulator::relax(double load_time, long max_iterations,
-                              const std::function<void(long, double)>& progress,
-                              double tolerance) {
+                              const std::function<void(long, double)>& progress, double tolerance) {
   StaticResult result;
   apply_position_constraints(model_, state_.x, load_time, scratch_);
   compute_forces(model_, state_, load_time);
