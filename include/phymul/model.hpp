@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "phymul/mesh.hpp"
+#include "phymul/parallel_plan.hpp"
 #include "phymul/scene.hpp"
 
 namespace phymul {
@@ -18,10 +19,10 @@ struct ShapeMemory {
   std::string component;
   double stiffness = 0.0;  // N/m
   FrameMode frame = FrameMode::polar;
-  bool reaction = true;             // spread -f/n over the neighbours so momentum is kept
-  std::vector<int> nodes;           // global ids of the nodes that carry a memory
-  Adjacency neighbours;             // per memory node, global ids; the ordered one-ring on surfaces
-  std::vector<Vec3> rest_offset;    // c = R0^T (X - G0), m; G0 the rest centroid
+  bool reaction = true;           // spread -f/n over the neighbours so momentum is kept
+  std::vector<int> nodes;         // global ids of the nodes that carry a memory
+  Adjacency neighbours;           // per memory node, global ids; the ordered one-ring on surfaces
+  std::vector<Vec3> rest_offset;  // c = R0^T (X - G0), m; G0 the rest centroid
   // Planar neighbourhoods (every surface node, flat interior ones) leave the best-fit
   // rotation free about their normal: such nodes add the normal pair with this weight (m^2).
   std::vector<double> normal_weight;  // zero for the others
@@ -29,13 +30,7 @@ struct ShapeMemory {
   // orthogonal pair at rest. Used by the `frame` mode and for flat interior normals.
   std::vector<std::array<int, 2>> frame_pair;
   bool surface = false;  // neighbours are ordered rings (normal from the ring)
-  // Parallel plan (plan_blocks): memory nodes k in contiguous blocks; the blocks of one colour
-  // write disjoint nodes (each node and its neighbours), so a colour runs in parallel and
-  // every force is summed in one order whatever the number of threads.
-  std::vector<int> block_start;              // k ranges, blocks + 1 entries
-  std::vector<int> colour_start;             // ranges of colour_blocks, colours + 1 entries
-  std::vector<int> colour_blocks;            // block ids, by colour
-  mutable std::vector<double> block_energy;  // scratch of each force pass, J per block
+  ParallelPlan plan;     // memory nodes k in coloured blocks (solver/parallel_plan.hpp)
 };
 
 // Constant enclosed volume of a closed, outward-oriented surface (DESIGN 2.2).

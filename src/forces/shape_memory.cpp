@@ -7,6 +7,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "phymul/parallel_plan.hpp"
+
 namespace phymul {
 namespace {
 
@@ -278,7 +280,10 @@ ShapeMemory build_shape_memory(const std::string& component, const Mesh& mesh, i
         m.frame == FrameMode::frame ? local_frame(m, k, rest, G0) : Eigen::Matrix3d::Identity();
     m.rest_offset.push_back(R0.transpose() * (rest[first_node + i] - G0));
   }
-  plan_blocks(m);
+  m.plan = plan_blocks(int(m.nodes.size()), [&m](int k, const std::function<void(int)>& visit) {
+    visit(m.nodes[k]);  // a node's pass writes it and its neighbours
+    for (int j : m.neighbours.row(k)) visit(j);
+  });
   return m;
 }
 
@@ -301,30 +306,9 @@ void add_centroid_reaction(std::span<const int> nb, const Vec3& fi, std::span<Ve
   for (int j : nb) f[j] -= share;
 }
 
-// Runs node_force(k) (which returns node k's energy) over every memory node, colour by
-// colour; the blocks of a colour in parallel. Energies are summed in block order.
-template <class NodeForce>
-double for_each_memory_node(const ShapeMemory& m, NodeForce&& node_force) {
-  constexpr size_t kParallelFrom = 2048;  // below, a thread team costs more than it saves
-  const int colours = int(m.colour_start.size()) - 1;
-#pragma omp parallel if (m.nodes.size() >= kParallelFrom)
-  for (int c = 0; c < colours; ++c) {
-#pragma omp for schedule(static)
-    for (int index = m.colour_start[c]; index < m.colour_start[c + 1]; ++index) {
-      const int b = m.colour_blocks[index];
-      double energy = 0.0;
-      for (int k = m.block_start[b]; k < m.block_start[b + 1]; ++k) energy += node_force(k);
-      m.block_energy[b] = energy;
-    }
-  }
-  double energy = 0.0;
-  for (double e : m.block_energy) energy += e;
-  return energy;
-}
-
 double add_polar_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::span<const Vec3> x,
                         std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f) {
-  return for_each_memory_node(m, [&](int k) {
+  return run_coloured(m.plan, [&](int k) {
     const int i = m.nodes[k];
     const Fit fit = fit_neighbourhood(m, k, rest, x);
     extract_rotation(fit.A, rotations[k]);
@@ -342,7 +326,7 @@ double add_polar_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::s
 
 double add_frame_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::span<const Vec3> x,
                         std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f) {
-  return for_each_memory_node(m, [&](int k) {
+  return run_coloured(m.plan, [&](int k) {
     const int i = m.nodes[k];
     const Vec3 pull = attraction_position(m, k, rest, x, rotations[k]) - x[i];
     f[i] += m.stiffness * pull;

@@ -14,10 +14,6 @@ namespace phymul {
 ShapeMemory build_shape_memory(const std::string& component, const Mesh& mesh, int first_node,
                                const MaterialSpec& material, std::span<const Vec3> rest);
 
-// Splits the memory nodes into blocks and colours them so that blocks of one colour write
-// disjoint nodes (the parallel plan of the force pass); build_shape_memory calls it.
-void plan_blocks(ShapeMemory& memory);
-
 // Attraction position (m) of memory node k given current positions x; updates the
 // warm-started rotation q (polar mode).
 Vec3 attraction_position(const ShapeMemory& memory, int k, std::span<const Vec3> rest,

@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "forces/shape_memory.hpp"
+#include "phymul/parallel_plan.hpp"
 #include "phymul/simulator.hpp"
 #include "support/models.hpp"
 
@@ -50,8 +51,7 @@ TEST_P(Threads, OneTwoAndThreeThreadsGiveBitIdenticalStates) {
     EXPECT_TRUE(bitwise_equal(one.x, many.x)) << threads << " threads";
     EXPECT_TRUE(bitwise_equal(one.v, many.v)) << threads << " threads";
     EXPECT_TRUE(bitwise_equal(one.f, many.f)) << threads << " threads";
-    EXPECT_EQ(std::memcmp(&one.shape_memory_energy, &many.shape_memory_energy, sizeof(double)),
-              0);
+    EXPECT_EQ(std::memcmp(&one.shape_memory_energy, &many.shape_memory_energy, sizeof(double)), 0);
   }
   // It moved: the comparison is not between two resting blocks.
   EXPECT_GT((one.x.back() - model.rest_position.back()).norm(), 1e-4);
@@ -69,14 +69,15 @@ TEST(ParallelPlan, BlocksOfOneColourWriteDisjointNodes) {
     Model model;
     add_elastic_component(model, "body", mesh, testing::material(10.0));
     const ShapeMemory& m = model.shape_memory[0];
-    ASSERT_GT(m.block_start.size(), 2u);
-    EXPECT_EQ(m.block_start.back(), int(m.nodes.size()));
+    const ParallelPlan& plan = m.plan;
+    ASSERT_GT(plan.blocks(), 1);
+    EXPECT_EQ(plan.block_start.back(), int(m.nodes.size()));
     std::vector<int> writer(size_t(model.node_count()), -1);
-    for (size_t c = 0; c + 1 < m.colour_start.size(); ++c) {
+    for (size_t c = 0; c + 1 < plan.colour_start.size(); ++c) {
       std::fill(writer.begin(), writer.end(), -1);
-      for (int index = m.colour_start[c]; index < m.colour_start[c + 1]; ++index) {
-        const int b = m.colour_blocks[index];
-        for (int k = m.block_start[b]; k < m.block_start[b + 1]; ++k) {
+      for (int index = plan.colour_start[c]; index < plan.colour_start[c + 1]; ++index) {
+        const int b = plan.colour_blocks[index];
+        for (int k = plan.block_start[b]; k < plan.block_start[b + 1]; ++k) {
           auto claim = [&](int i) {
             EXPECT_TRUE(writer[i] == -1 || writer[i] == b)
                 << "node " << i << " written by blocks " << writer[i] << " and " << b;
@@ -88,8 +89,8 @@ TEST(ParallelPlan, BlocksOfOneColourWriteDisjointNodes) {
       }
     }
     // Every block has exactly one colour.
-    std::vector<int> seen(m.block_start.size() - 1, 0);
-    for (int b : m.colour_blocks) ++seen[b];
+    std::vector<int> seen(plan.block_start.size() - 1, 0);
+    for (int b : plan.colour_blocks) ++seen[b];
     for (int count : seen) EXPECT_EQ(count, 1);
   }
 }
