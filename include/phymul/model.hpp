@@ -33,6 +33,22 @@ struct ShapeMemory {
   ParallelPlan plan;     // memory nodes k in coloured blocks (solver/parallel_plan.hpp)
 };
 
+// Explicit finite elements of one component (TLED, Miller et al. 2007): total Lagrangian,
+// compressible Neo-Hookean W = mu/2 (J^-2/3 I1 - 3) + kappa/2 (J - 1)^2 (the reference FEM's
+// law); linear tetrahedra, or hexahedra with one integration point and Flanagan-Belytschko
+// hourglass control.
+struct ExplicitFem {
+  std::string component;
+  double mu = 0.0, kappa = 0.0;  // Pa
+  int nodes_per_cell = 8;        // 8 (hexahedra) or 4 (tetrahedra)
+  std::vector<int> cells;        // global node ids, nodes_per_cell per cell
+  std::vector<double> gradient;  // dN_a/dX at the cell centre, nodes_per_cell x 3 per cell
+  std::vector<double> volume;    // m^3, reference
+  std::vector<double> gamma;     // hexahedra: hourglass vectors, 8 x 4 per cell
+  std::vector<double> hourglass_stiffness;  // N/m per cell
+  ParallelPlan plan;                        // cells in coloured blocks
+};
+
 // Constant enclosed volume of a closed, outward-oriented surface (DESIGN 2.2).
 struct VolumeConstraint {
   std::string component;
@@ -96,6 +112,7 @@ struct Model {
   std::vector<int> cell_component;
   std::vector<Component> components;
   std::vector<ShapeMemory> shape_memory;
+  std::vector<ExplicitFem> explicit_fem;
   std::vector<VolumeConstraint> volumes;
   std::vector<AppliedForce> forces;
   std::vector<PrescribedDisplacement> prescribed;
@@ -113,6 +130,8 @@ struct Model {
 
 // Building blocks of a model (compile_scene uses them; embedding programs may too).
 // Each throws std::invalid_argument with an actionable message.
+// material.model chooses the elasticity: shape memory (stiffness) or explicit finite
+// elements (young, poisson; hexahedra or tetrahedra only).
 int add_elastic_component(Model& model, const std::string& name, const Mesh& mesh,
                           const MaterialSpec& material);
 void add_volume_constraint(Model& model, int component);

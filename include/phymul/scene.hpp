@@ -72,8 +72,16 @@ struct MeshSpec {
   SourceLoc loc;
 };
 
+// How an elastic component resists deformation: the paper's local shape memory, or explicit
+// finite elements (TLED: hexahedra with one point and hourglass control, or tetrahedra).
+enum class ElasticModel { shape_memory, fem };
+
 struct MaterialSpec {
+  ElasticModel model = ElasticModel::shape_memory;
   double stiffness = 0.0;         // N/m, shape memory spring of each node
+  double young = 0.0;             // Pa, fem: compressible Neo-Hookean
+  double poisson = 0.0;           // fem, in (-1, 0.5)
+  double hourglass = 0.05;        // fem hexahedra: hourglass stiffness over the bulk one
   std::optional<double> density;  // kg/m^3 (volumetric meshes)
   std::optional<double> mass;     // kg, total, spread by lumped cell measure
   FrameMode frame = FrameMode::polar;

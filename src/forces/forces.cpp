@@ -1,5 +1,6 @@
 #include "forces/forces.hpp"
 
+#include "forces/explicit_fem.hpp"
 #include "forces/pressure.hpp"
 #include "forces/shape_memory.hpp"
 
@@ -21,6 +22,8 @@ void compute_forces(const Model& model, State& s, double load_time) {
     s.shape_memory_energy += add_shape_memory_forces(m, model.rest_position, s.x, rotations, s.f);
     first_rotation += m.nodes.size();
   }
+  for (const ExplicitFem& e : model.explicit_fem)
+    s.shape_memory_energy += add_explicit_fem_forces(e, model.rest_position, s.x, s.f);
 }
 
 }  // namespace phymul

@@ -18,6 +18,8 @@ const Condition kBox{"generator", {"box"}};
 const Condition kEllipsoid{"generator", {"ellipsoid"}};
 const Condition kCylinder{"generator", {"cylinder"}};
 const Condition kRound{"generator", {"ellipsoid", "cylinder"}};
+const Condition kShapeMemory{"model", {"shape-memory"}};
+const Condition kFem{"model", {"fem"}};
 const Condition kVolume{"surface", {"false"}};
 const Condition kDisplacement{"type", {"displacement"}};
 
@@ -292,12 +294,44 @@ std::vector<Parameter> mesh_parameters() {
 std::vector<Parameter> material_parameters() {
   return {
       {.section = "material",
+       .name = "model",
+       .kind = Kind::choice,
+       .choices = {"shape-memory", "fem"},
+       .default_value = "shape-memory",
+       .doc = "Elasticity: the paper's local shape memory, or explicit finite elements (TLED: "
+              "compressible Neo-Hookean; hexahedra with one point and hourglass control, or "
+              "tetrahedra)."},
+      {.section = "material",
        .name = "stiffness",
        .kind = Kind::quantity,
        .dimension = Dimension::stiffness,
        .range = gt(0),
        .required = true,
+       .when = {kShapeMemory},
        .doc = "Shape-memory spring of each node."},
+      {.section = "material",
+       .name = "young",
+       .kind = Kind::quantity,
+       .dimension = Dimension::pressure,
+       .range = gt(0),
+       .required = true,
+       .when = {kFem},
+       .doc = "Young's modulus of the finite elements."},
+      {.section = "material",
+       .name = "poisson",
+       .kind = Kind::quantity,
+       .range = {-1.0, 0.5, true, true},
+       .required = true,
+       .when = {kFem},
+       .doc = "Poisson's ratio of the finite elements; near 0.5 the stable time step shrinks "
+              "with the bulk wave speed."},
+      {.section = "material",
+       .name = "hourglass",
+       .kind = Kind::quantity,
+       .range = closed(0.0, 1.0),
+       .default_value = "0.05",
+       .when = {kFem},
+       .doc = "Hexahedra: hourglass stiffness as a fraction of the element's bulk stiffness."},
       {.section = "material",
        .name = "density",
        .kind = Kind::quantity,
@@ -317,11 +351,13 @@ std::vector<Parameter> material_parameters() {
        .kind = Kind::choice,
        .choices = {"polar", "frame"},
        .default_value = "polar",
+       .when = {kShapeMemory},
        .doc = "How the local rotation of the rest shape is estimated."},
       {.section = "material",
        .name = "reaction",
        .kind = Kind::boolean,
        .default_value = "true",
+       .when = {kShapeMemory},
        .doc = "Apply -f/n to the neighbours of each node, so that momentum is kept."},
   };
 }

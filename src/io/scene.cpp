@@ -273,7 +273,12 @@ MeshSpec SceneBuilder::mesh(SectionReader& reader) {
 MaterialSpec SceneBuilder::material(SectionReader& reader) {
   MaterialSpec spec;
   spec.loc = reader.loc();
+  reader.read("model", spec.model,
+              {{"shape-memory", ElasticModel::shape_memory}, {"fem", ElasticModel::fem}});
   reader.read("stiffness", spec.stiffness);
+  reader.read("young", spec.young);
+  reader.read("poisson", spec.poisson);
+  reader.read("hourglass", spec.hourglass);
   reader.read("density", spec.density);
   reader.read("mass", spec.mass);
   reader.read("frame", spec.frame, {{"polar", FrameMode::polar}, {"frame", FrameMode::frame}});

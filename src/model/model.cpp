@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "forces/explicit_fem.hpp"
 #include "forces/shape_memory.hpp"
 
 namespace phymul {
@@ -43,7 +44,7 @@ std::vector<double> node_masses(const std::string& name, const Mesh& mesh,
 int add_elastic_component(Model& model, const std::string& name, const Mesh& mesh,
                           const MaterialSpec& material) {
   validate(mesh);
-  if (!(material.stiffness > 0.0))
+  if (material.model == ElasticModel::shape_memory && !(material.stiffness > 0.0))
     throw std::invalid_argument(
         fmt::format("object '{}': 'stiffness' must be > 0 N/m (got {})", name, material.stiffness));
   Component c;
@@ -73,8 +74,12 @@ int add_elastic_component(Model& model, const std::string& name, const Mesh& mes
     model.cells.push_back(cell);
     model.cell_component.push_back(component);
   }
-  model.shape_memory.push_back(
-      build_shape_memory(name, mesh, c.first_node, material, model.rest_position));
+  if (material.model == ElasticModel::fem)
+    model.explicit_fem.push_back(
+        build_explicit_fem(name, mesh, c.first_node, material, model.rest_position));
+  else
+    model.shape_memory.push_back(
+        build_shape_memory(name, mesh, c.first_node, material, model.rest_position));
   model.components.push_back(std::move(c));
   return component;
 }

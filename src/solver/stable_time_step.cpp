@@ -4,6 +4,8 @@
 
 #include "phymul/simulator.hpp"
 
+#include "forces/explicit_fem.hpp"
+
 namespace phymul {
 
 std::vector<double> stiffness_row_sums(const Model& model) {
@@ -19,6 +21,7 @@ std::vector<double> stiffness_row_sums(const Model& model) {
       for (int j : nb) row[j] += 2.0 * m.stiffness / double(nb.size());
     }
   }
+  for (const ExplicitFem& e : model.explicit_fem) add_explicit_fem_rows(e, row);
   return row;
 }
 
