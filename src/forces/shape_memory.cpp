@@ -107,23 +107,28 @@ bool solve_positive_definite(const Eigen::Matrix3d& M, const Vec3& b, Vec3& y) {
   const double c12 = M(0, 1) * M(0, 2) - M(0, 0) * M(1, 2);
   const double c22 = M(0, 0) * M(1, 1) - M(0, 1) * M(0, 1);
   y = Vec3(c00 * b(0) + c01 * b(1) + c02 * b(2), c01 * b(0) + c11 * b(1) + c12 * b(2),
-           c02 * b(0) + c12 * b(1) + c22 * b(2)) /
-      det;
+           c02 * b(0) + c12 * b(1) + c22 * b(2)) *
+      (1.0 / det);
   return true;
 }
 
-// q turned by the body-frame rotation vector theta. Below 1e-4 rad the unnormalised
-// quaternion (1, theta/2) turns by theta to 1e-13 relative, without sin and cos.
-void turn(Eigen::Quaterniond& q, const Vec3& theta, double angle) {
-  if (angle < 1e-4)
+// q turned by the body-frame rotation vector theta (|theta|^2 = angle2). Below 1e-4 rad the
+// unnormalised quaternion (1, theta/2) turns by theta to 1e-13 relative, and one Newton step
+// for 1/sqrt(|q|^2) near 1 renormalises (to 1e-17, drift included): no sin, cos, sqrt or
+// division on the path every node takes every step.
+void turn(Eigen::Quaterniond& q, const Vec3& theta, double angle2) {
+  if (angle2 < 1e-8) {
     q = q * Eigen::Quaterniond(1.0, 0.5 * theta(0), 0.5 * theta(1), 0.5 * theta(2));
-  else
-    q = q * Eigen::Quaterniond(Eigen::AngleAxisd(std::min(angle, 1.0), theta / angle));
+    q.coeffs() *= 1.5 - 0.5 * q.squaredNorm();
+    return;
+  }
+  const double angle = std::sqrt(angle2);
+  q = q * Eigen::Quaterniond(Eigen::AngleAxisd(std::min(angle, 1.0), theta / angle));
   q.normalize();
 }
 
 struct Turn {
-  double angle = 0.0;  // rad
+  double angle2 = 0.0;  // rad^2, the turn's squared angle
   bool newton = false;
 };
 
@@ -140,9 +145,9 @@ Turn rotation_iteration(const Eigen::Matrix3d& A, Eigen::Quaterniond& q) {
     theta *= 2.0;
   else
     theta = 2.0 * w / std::max(std::abs(S.trace()), 1e-300);
-  result.angle = theta.norm();
-  if (result.angle == 0.0 || !std::isfinite(result.angle)) return {0.0, result.newton};
-  turn(q, theta, result.angle);
+  result.angle2 = theta.squaredNorm();
+  if (result.angle2 == 0.0 || !std::isfinite(result.angle2)) return {0.0, result.newton};
+  turn(q, theta, result.angle2);
   return result;
 }
 
@@ -234,7 +239,7 @@ void extract_rotation(const Eigen::Matrix3d& A, Eigen::Quaterniond& q, int max_i
   // Converged once a turn is below 1e-14 rad, or after a Newton turn below 1e-8 rad (the
   // next would be of its square): forces then sit at round-off. A warm start needs one
   // iteration; a start far away restarts from an SVD.
-  auto converged = [](const Turn& t) { return t.angle < 1e-14 || (t.newton && t.angle < 1e-8); };
+  auto converged = [](const Turn& t) { return t.angle2 < 1e-28 || (t.newton && t.angle2 < 1e-16); };
   for (int it = 0; it < max_iterations; ++it)
     if (converged(rotation_iteration(A, q))) return;
   q = nearest_rotation(A);
