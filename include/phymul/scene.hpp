@@ -81,7 +81,7 @@ struct MaterialSpec {
   double stiffness = 0.0;         // N/m, shape memory spring of each node
   double young = 0.0;             // Pa, fem: compressible Neo-Hookean
   double poisson = 0.0;           // fem, in (-1, 0.5)
-  double hourglass = 0.05;        // fem hexahedra: hourglass stiffness over the bulk one
+  double hourglass = 0.3;         // fem hexahedra: hourglass stiffness over the shear one
   std::optional<double> density;  // kg/m^3 (volumetric meshes)
   std::optional<double> mass;     // kg, total, spread by lumped cell measure
   FrameMode frame = FrameMode::polar;
