@@ -73,6 +73,7 @@ void BM_Equilibrium(benchmark::State& state) {
   model.settings.mode = SolveMode::static_equilibrium;
   model.settings.tolerance = 1e-6;
   model.settings.load_steps = 4;
+  model.settings.relaxation = Relaxation::fire;
   finalize(model);
   omp_set_num_threads(1);
   StaticResult result;

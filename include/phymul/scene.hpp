@@ -40,6 +40,7 @@ class SceneError : public std::runtime_error {
 enum class Integrator { verlet, newton_cotes };
 enum class SolveMode { dynamic, static_equilibrium };
 enum class FrameMode { polar, frame };
+enum class Relaxation { fire, kinetic, viscous };
 
 struct SimulationSpec {
   std::optional<double> dt;  // s; nullopt = "auto"
@@ -52,7 +53,7 @@ struct SimulationSpec {
   double tolerance = 1e-6;        // N, static mode: largest residual nodal force
   long max_iterations = 1000000;  // static mode
   int load_steps = 1;             // static mode: equilibria at duration * k / load_steps
-  bool kinetic_damping = true;    // static mode: zero velocities at kinetic-energy peaks
+  Relaxation relaxation = Relaxation::kinetic;  // static mode: how energy is taken out
   bool relaxation_mass_scaling = true;  // static mode: fictitious masses (Simulator)
   SourceLoc loc;
 };

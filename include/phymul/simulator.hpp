@@ -73,6 +73,11 @@ class Simulator {
   void accelerations(std::vector<Vec3>& a, bool tangent = true);
   void remove_contact_forces(std::vector<Vec3>& r) const;
   void scale_masses_for_relaxation();
+  struct Fire {
+    double alpha = 0.1;  // share of the force direction mixed into the velocity
+    int downhill = 0;    // steps since the last restart
+  };
+  void fire_update(Fire& fire);
 
   Model model_;
   State state_;
@@ -84,6 +89,9 @@ class Simulator {
   // Inertia of each node in the pseudo-dynamics: its mass, or in static mode a fictitious
   // mass that gives every node the same Gershgorin frequency.
   std::vector<double> inertia_;
+  double fire_alpha_ = 0.1;
+  int fire_positive_ = 0;
+  double fire_dt_max_ = 0.0;
 };
 
 }  // namespace phymul

@@ -232,7 +232,10 @@ SimulationSpec SceneBuilder::simulation(SectionReader& reader) {
   reader.read("tolerance", spec.tolerance);
   reader.read("max_iterations", spec.max_iterations);
   reader.read("load_steps", spec.load_steps);
-  reader.read("kinetic_damping", spec.kinetic_damping);
+  reader.read("relaxation", spec.relaxation,
+              {{"fire", Relaxation::fire},
+               {"kinetic", Relaxation::kinetic},
+               {"viscous", Relaxation::viscous}});
   reader.done();
   return spec;
 }

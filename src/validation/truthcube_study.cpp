@@ -44,6 +44,7 @@ void run_shape_memory(const Study& study, const std::vector<Bead>& beads,
   model.settings.tolerance = options.tolerance * material.stiffness * (kEdge / options.cells);
   model.settings.max_iterations = 400000;
   model.settings.mode = SolveMode::static_equilibrium;  // relaxation masses (Simulator)
+  model.settings.relaxation = Relaxation::fire;
   finalize(model);
   Simulator sim(model);
   for (int l = 0; l < kLevels; ++l) {
