@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# make bench: Google Benchmark of full steps; results also in bench/results.json.
+# make bench: Google Benchmark of full steps and of static relaxation (bench/results.json),
+# and the resident memory of the 40^3 step model in a fresh process (bench/memory.json).
 set -euo pipefail
 build=${1:-build}
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -8,3 +9,4 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 "$root/$build/bench/phymul_interaction_bench" \
   --benchmark_out="$root/bench/results_interactions.json" --benchmark_out_format=json \
   --benchmark_counters_tabular=true
+"$root/$build/bench/phymul_memory" 40 | tee "$root/bench/memory.json"

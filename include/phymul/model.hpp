@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "phymul/mesh.hpp"
+#include "phymul/parallel_plan.hpp"
 #include "phymul/scene.hpp"
 #include "phymul/schedule.hpp"
 
@@ -19,19 +20,34 @@ struct ShapeMemory {
   std::string component;
   double stiffness = 0.0;  // N/m
   FrameMode frame = FrameMode::polar;
-  bool reaction = true;             // spread -f/n over the neighbours so momentum is kept
-  std::vector<int> nodes;           // global ids of the nodes that carry a memory
-  Adjacency neighbours;             // per memory node, global ids; the ordered one-ring on surfaces
-  std::vector<Vec3> rest_offset;    // c = R0^T (X - G0), m
-  std::vector<Vec3> rest_centroid;  // G0, m
+  bool reaction = true;           // spread -f/n over the neighbours so momentum is kept
+  std::vector<int> nodes;         // global ids of the nodes that carry a memory
+  Adjacency neighbours;           // per memory node, global ids; the ordered one-ring on surfaces
+  std::vector<Vec3> rest_offset;  // c = R0^T (X - G0), m; G0 the rest centroid
   // Planar neighbourhoods (every surface node, flat interior ones) leave the best-fit
   // rotation free about their normal: such nodes add the normal pair with this weight (m^2).
-  std::vector<double> normal_weight;
-  std::vector<Vec3> rest_normal;  // unit n0 of those nodes (zero for the others)
+  std::vector<double> normal_weight;  // zero for the others
   // Two neighbours (positions within the row) spanning the node's frame: the most
   // orthogonal pair at rest. Used by the `frame` mode and for flat interior normals.
   std::vector<std::array<int, 2>> frame_pair;
   bool surface = false;  // neighbours are ordered rings (normal from the ring)
+  ParallelPlan plan;     // memory nodes k in coloured blocks (solver/parallel_plan.hpp)
+};
+
+// Explicit finite elements of one component (TLED, Miller et al. 2007): total Lagrangian,
+// compressible Neo-Hookean W = mu/2 (J^-2/3 I1 - 3) + kappa/2 (J - 1)^2 (the reference FEM's
+// law); linear tetrahedra, or hexahedra with one integration point and Flanagan-Belytschko
+// hourglass control.
+struct ExplicitFem {
+  std::string component;
+  double mu = 0.0, kappa = 0.0;  // Pa
+  int nodes_per_cell = 8;        // 8 (hexahedra) or 4 (tetrahedra)
+  std::vector<int> cells;        // global node ids, nodes_per_cell per cell
+  std::vector<double> gradient;  // dN_a/dX at the cell centre, nodes_per_cell x 3 per cell
+  std::vector<double> volume;    // m^3, reference
+  std::vector<double> gamma;     // hexahedra: hourglass vectors, 8 x 4 per cell
+  std::vector<double> hourglass_stiffness;  // N/m per cell
+  ParallelPlan plan;                        // cells in coloured blocks
 };
 
 // Constant enclosed volume of a closed, outward-oriented surface (DESIGN 2.2).
@@ -145,6 +161,7 @@ struct Model {
   std::vector<int> cell_component;
   std::vector<Component> components;
   std::vector<ShapeMemory> shape_memory;
+  std::vector<ExplicitFem> explicit_fem;
   std::vector<VolumeConstraint> volumes;
   std::vector<AppliedForce> forces;
   std::vector<PrescribedDisplacement> prescribed;
@@ -172,6 +189,8 @@ struct Model {
 
 // Building blocks of a model (compile_scene uses them; embedding programs may too).
 // Each throws std::invalid_argument with an actionable message.
+// material.model chooses the elasticity: shape memory (stiffness) or explicit finite
+// elements (young, poisson; hexahedra or tetrahedra only).
 int add_elastic_component(Model& model, const std::string& name, const Mesh& mesh,
                           const MaterialSpec& material);
 void add_volume_constraint(Model& model, int component);

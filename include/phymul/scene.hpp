@@ -40,6 +40,7 @@ class SceneError : public std::runtime_error {
 enum class Integrator { verlet, newton_cotes };
 enum class SolveMode { dynamic, static_equilibrium };
 enum class FrameMode { polar, frame };
+enum class Relaxation { fire, kinetic, viscous };
 
 struct SimulationSpec {
   std::optional<double> dt;  // s; nullopt = "auto"
@@ -52,7 +53,8 @@ struct SimulationSpec {
   double tolerance = 1e-6;        // N, static mode: largest residual nodal force
   long max_iterations = 1000000;  // static mode
   int load_steps = 1;             // static mode: equilibria at duration * k / load_steps
-  bool kinetic_damping = true;    // static mode: zero velocities at kinetic-energy peaks
+  Relaxation relaxation = Relaxation::kinetic;  // static mode: how energy is taken out
+  bool relaxation_mass_scaling = true;          // static mode: fictitious masses (Simulator)
   SourceLoc loc;
 };
 
@@ -73,8 +75,16 @@ struct MeshSpec {
   SourceLoc loc;
 };
 
+// How an elastic component resists deformation: the paper's local shape memory, or explicit
+// finite elements (TLED: hexahedra with one point and hourglass control, or tetrahedra).
+enum class ElasticModel { shape_memory, fem };
+
 struct MaterialSpec {
+  ElasticModel model = ElasticModel::shape_memory;
   double stiffness = 0.0;         // N/m, shape memory spring of each node
+  double young = 0.0;             // Pa, fem: compressible Neo-Hookean
+  double poisson = 0.0;           // fem, in (-1, 0.5)
+  double hourglass = 0.3;         // fem hexahedra: hourglass stiffness over the shear one
   std::optional<double> density;  // kg/m^3 (volumetric meshes)
   std::optional<double> mass;     // kg, total, spread by lumped cell measure
   FrameMode frame = FrameMode::polar;

@@ -28,6 +28,8 @@ class InstabilityError : public std::runtime_error {
 // bound on the shape-memory stiffness over the node masses (undamped central difference
 // limit 2/omega_max).
 double stable_time_step(const Model& model);
+// Per node, the Gershgorin row sum (N/m) of the shape-memory stiffness behind that bound.
+std::vector<double> stiffness_row_sums(const Model& model);
 
 struct StaticResult {
   bool converged = false;
@@ -42,6 +44,8 @@ struct StaticProgress {
   long iterations = 0;            // in the load steps before it
   long step_iterations = 0;       // in the load step under way
   double previous_kinetic = 0.0;  // J, the kinetic damping's last peak candidate
+  double fire_alpha = 0.1;        // FIRE: share of the force direction mixed into velocities
+  long fire_downhill = 0;         // FIRE: steps since its last restart
 };
 
 class Simulator {
@@ -60,7 +64,11 @@ class Simulator {
   // Relax to equilibrium with the loads of load_time (s); stops when the largest free
   // residual force is below the scene's tolerance or after max_iterations.
   StaticResult relax(double load_time, long max_iterations,
-                     const std::function<void(long, double)>& progress = {});
+                     const std::function<void(long, double)>& progress, double tolerance);
+  StaticResult relax(double load_time, long max_iterations,
+                     const std::function<void(long, double)>& progress = {}) {
+    return relax(load_time, max_iterations, progress, model_.settings.tolerance);
+  }
   // The scene's static mode: load steps up to the scene's duration.
   StaticResult solve_static(const std::function<void(long, double)>& progress = {});
   // Continues a static solve from static_progress() (set by restore), as if never stopped.
@@ -89,12 +97,14 @@ class Simulator {
   // check_stability; when it fails, the state goes back to before the step, then it throws.
   void checked_step(double time, double previous_load);
   StaticResult continue_relax(double load_time, long max_iterations,
-                              const std::function<void(long, double)>& progress);
+                              const std::function<void(long, double)>& progress, double tolerance);
   StaticResult static_load_steps(const std::function<void(long, double)>& progress);
   void accelerations(std::vector<Vec3>& a, bool tangent = true);
   void remove_contact_forces(std::vector<Vec3>& r) const;
   struct ContactStep begin_contact_step(double dt);
   void end_contact_step(double dt);
+  void scale_masses_for_relaxation();
+  void fire_update(StaticProgress& fire);
 
   Model model_;
   State state_;
@@ -109,6 +119,9 @@ class Simulator {
   std::shared_ptr<DeformableContactWorkspace> deformable_;  // null without contact pairs
   double size_scale_ = 1.0;                                 // m, diagonal of the rest bounding box
   std::vector<double> shortest_edge_;  // m per node, for the runaway guard (runaway_guard.hpp)
+  // Inertia of each node in the pseudo-dynamics: its mass, or in static mode a fictitious
+  // mass that gives every node the same Gershgorin frequency.
+  std::vector<double> inertia_;
 };
 
 }  // namespace phymul

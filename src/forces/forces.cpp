@@ -1,13 +1,16 @@
 #include "forces/forces.hpp"
 
 #include "forces/active_fibres.hpp"
+#include "forces/explicit_fem.hpp"
 #include "forces/pressure.hpp"
 #include "forces/shape_memory.hpp"
 
 namespace phymul {
 
 void compute_forces(const Model& model, State& s, double load_time) {
-  for (int i = 0; i < model.node_count(); ++i) s.f[i] = model.mass[i] * model.gravity;
+  const int n = model.node_count();
+#pragma omp parallel for schedule(static) if (n >= 4096)
+  for (int i = 0; i < n; ++i) s.f[i] = model.mass[i] * model.gravity;
   for (const AppliedForce& load : model.forces) {
     const Vec3 fi = load.force.at(load_time);
     for (int i : load.nodes) s.f[i] += fi;
@@ -21,6 +24,8 @@ void compute_forces(const Model& model, State& s, double load_time) {
     first_rotation += m.nodes.size();
   }
   for (const FibreBundle& fibres : model.fibres) add_fibre_forces(fibres, s.x, load_time, s.f);
+  for (const ExplicitFem& e : model.explicit_fem)
+    s.shape_memory_energy += add_explicit_fem_forces(e, model.rest_position, s.x, s.f);
 }
 
 }  // namespace phymul

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "phymul/parallel_plan.hpp"
+
 namespace phymul {
 namespace {
 
@@ -79,27 +81,74 @@ Eigen::Matrix3d covariance_about(std::span<const int> nb, std::span<const Vec3> 
 
 namespace {
 
+// tr(S) I - S for the symmetric part of S: the Hessian of -trace(R^T A) in the body frame.
+Eigen::Matrix3d rotation_hessian(const Eigen::Matrix3d& S) {
+  const Eigen::Matrix3d Ss = 0.5 * (S + S.transpose());
+  return Ss.trace() * Eigen::Matrix3d::Identity() - Ss;
+}
+
+Vec3 axial_of_skew(const Eigen::Matrix3d& S) {
+  return Vec3(0.5 * (S(2, 1) - S(1, 2)), 0.5 * (S(0, 2) - S(2, 0)), 0.5 * (S(1, 0) - S(0, 1)));
+}
+
+// Solves M y = b for a symmetric 3x3 M by its adjugate, when M is safely positive
+// definite (Sylvester's criterion, and a determinant not negligible against its scale);
+// an LLT or a pow() here cost a fifth of a step.
+bool solve_positive_definite(const Eigen::Matrix3d& M, const Vec3& b, Vec3& y) {
+  const double c00 = M(1, 1) * M(2, 2) - M(1, 2) * M(1, 2);
+  const double c01 = M(0, 2) * M(1, 2) - M(0, 1) * M(2, 2);
+  const double c02 = M(0, 1) * M(1, 2) - M(0, 2) * M(1, 1);
+  const double det = M(0, 0) * c00 + M(0, 1) * c01 + M(0, 2) * c02;
+  const double scale = M.trace() / 3.0;
+  if (!(M(0, 0) > 0.0 && M(0, 0) * M(1, 1) > M(0, 1) * M(0, 1) &&
+        det > 1e-6 * scale * scale * scale))
+    return false;
+  const double c11 = M(0, 0) * M(2, 2) - M(0, 2) * M(0, 2);
+  const double c12 = M(0, 1) * M(0, 2) - M(0, 0) * M(1, 2);
+  const double c22 = M(0, 0) * M(1, 1) - M(0, 1) * M(0, 1);
+  y = Vec3(c00 * b(0) + c01 * b(1) + c02 * b(2), c01 * b(0) + c11 * b(1) + c12 * b(2),
+           c02 * b(0) + c12 * b(1) + c22 * b(2)) *
+      (1.0 / det);
+  return true;
+}
+
+// q turned by the body-frame rotation vector theta (|theta|^2 = angle2). Below 1e-4 rad the
+// unnormalised quaternion (1, theta/2) turns by theta to 1e-13 relative, and one Newton step
+// for 1/sqrt(|q|^2) near 1 renormalises (to 1e-17, drift included): no sin, cos, sqrt or
+// division on the path every node takes every step.
+void turn(Eigen::Quaterniond& q, const Vec3& theta, double angle2) {
+  if (angle2 < 1e-8) {
+    q = q * Eigen::Quaterniond(1.0, 0.5 * theta(0), 0.5 * theta(1), 0.5 * theta(2));
+    q.coeffs() *= 1.5 - 0.5 * q.squaredNorm();
+    return;
+  }
+  const double angle = std::sqrt(angle2);
+  q = q * Eigen::Quaterniond(Eigen::AngleAxisd(std::min(angle, 1.0), theta / angle));
+  q.normalize();
+}
+
+struct Turn {
+  double angle2 = 0.0;  // rad^2, the turn's squared angle
+  bool newton = false;
+};
+
 // Turns q towards the maximiser of trace(R^T A). Near the optimum a Newton step on the
 // symmetry condition skew(R^T A) = 0 (quadratic); elsewhere, or when tr(S) I - S is not
 // positive definite, the step of Mueller et al. (2016) (linear, but always ascending).
-// Returns the angle turned (rad).
-double rotation_iteration(const Eigen::Matrix3d& A, Eigen::Quaterniond& q) {
-  const Eigen::Matrix3d R = q.toRotationMatrix();
-  const Eigen::Matrix3d S = R.transpose() * A;
-  const Vec3 w(0.5 * (S(2, 1) - S(1, 2)), 0.5 * (S(0, 2) - S(2, 0)), 0.5 * (S(1, 0) - S(0, 1)));
-  const Eigen::Matrix3d Ss = 0.5 * (S + S.transpose());
-  const Eigen::Matrix3d M = Ss.trace() * Eigen::Matrix3d::Identity() - Ss;
+Turn rotation_iteration(const Eigen::Matrix3d& A, Eigen::Quaterniond& q) {
+  const Eigen::Matrix3d S = q.toRotationMatrix().transpose() * A;
+  const Vec3 w = axial_of_skew(S);
+  Turn result;
   Vec3 theta;  // body-frame turn
-  const Eigen::LLT<Eigen::Matrix3d> llt(M);
-  if (llt.info() == Eigen::Success && M.determinant() > 1e-6 * std::pow(M.trace() / 3.0, 3))
-    theta = 2.0 * llt.solve(w);
+  result.newton = solve_positive_definite(rotation_hessian(S), w, theta);
+  if (result.newton)
+    theta *= 2.0;
   else
     theta = 2.0 * w / std::max(std::abs(S.trace()), 1e-300);
-  const double angle = theta.norm();
-  if (angle == 0.0 || !std::isfinite(angle)) return 0.0;
-  q = q * Eigen::Quaterniond(Eigen::AngleAxisd(std::min(angle, 1.0), theta / angle));
-  q.normalize();
-  return angle;
+  result.angle2 = theta.squaredNorm();
+  if (result.angle2 == 0.0 || !std::isfinite(result.angle2)) return {0.0, result.newton};
+  turn(q, theta, result.angle2);
+  return result;
 }
 
 // The proper rotation nearest to A (Kabsch): a cold start far from the warm one.
@@ -112,22 +161,38 @@ Eigen::Quaterniond nearest_rotation(const Eigen::Matrix3d& A) {
 
 // What the polar fit of a neighbourhood needs, computed once per node and step.
 struct Fit {
-  Vec3 g;                 // current centroid of the neighbours
-  Eigen::Matrix3d A;      // sum (x_j - g)(X_j - G0)^T (+ the normal pair)
-  Vec3 N = Vec3::Zero();  // unnormalised current normal of a flat neighbourhood
+  Vec3 g;                  // current centroid of the neighbours
+  Vec3 G0;                 // rest centroid of the neighbours
+  Eigen::Matrix3d A;       // sum (x_j - g)(X_j - G0)^T (+ the normal pair)
+  Vec3 N = Vec3::Zero();   // unnormalised current normal of a flat neighbourhood
+  Vec3 n0 = Vec3::Zero();  // unit rest normal of a flat neighbourhood
 };
 
+// The rest centroid and rest normal are recomputed rather than stored: 48 bytes a node less,
+// for a few additions on data the pass reads anyway.
 Fit fit_neighbourhood(const ShapeMemory& m, int k, std::span<const Vec3> rest,
                       std::span<const Vec3> x) {
   const auto nb = m.neighbours.row(k);
+  const int i = m.nodes[k];
+  // One pass, about the node itself (small differences, no cancellation):
+  // sum (x_j - g)(X_j - G0)^T = sum d_j r_j^T - (sum d_j) mean(r)^T.
+  Vec3 sum_d = Vec3::Zero(), sum_r = Vec3::Zero();
+  Eigen::Matrix3d P = Eigen::Matrix3d::Zero();
+  for (int j : nb) {
+    const Vec3 d = x[j] - x[i], r = rest[j] - rest[i];
+    sum_d += d;
+    sum_r += r;
+    P.noalias() += d * r.transpose();
+  }
+  const double count = double(nb.size());
   Fit fit;
-  fit.g = centroid(nb, x);
-  fit.A.setZero();
-  const Vec3& G0 = m.rest_centroid[k];
-  for (int j : nb) fit.A += (x[j] - fit.g) * (rest[j] - G0).transpose();
+  fit.g = x[i] + sum_d / count;
+  fit.G0 = rest[i] + sum_r / count;
+  fit.A = P - sum_d * (sum_r / count).transpose();
   if (m.normal_weight[k] > 0.0) {
     fit.N = neighbourhood_normal(m, k, x, fit.g);
-    fit.A += m.normal_weight[k] * fit.N.normalized() * m.rest_normal[k].transpose();
+    fit.n0 = neighbourhood_normal(m, k, rest, fit.G0).normalized();
+    fit.A += m.normal_weight[k] * fit.N.normalized() * fit.n0.transpose();
   }
   return fit;
 }
@@ -140,17 +205,16 @@ void add_rotation_reaction(const ShapeMemory& m, int k, std::span<const Vec3> re
                            std::span<const Vec3> x, const Fit& fit, const Eigen::Matrix3d& R,
                            const Vec3& pull, std::span<Vec3> f) {
   const auto nb = m.neighbours.row(k);
-  Eigen::Matrix3d S = R.transpose() * fit.A;
-  S = 0.5 * (S + S.transpose());
-  const Eigen::Matrix3d M = S.trace() * Eigen::Matrix3d::Identity() - S;
+  const Eigen::Matrix3d M = rotation_hessian(R.transpose() * fit.A);
   const Vec3 p = m.stiffness * m.rest_offset[k].cross(R.transpose() * pull);  // dE = p.theta
-  const Vec3 mu = 2.0 * M.inverse() * p;
-  const Vec3& G0 = m.rest_centroid[k];
-  for (int j : nb) f[j] -= 0.5 * R * mu.cross(rest[j] - G0);
+  Vec3 mu;
+  if (!solve_positive_definite(M, p, mu)) mu = M.inverse() * p;
+  mu *= 2.0;
+  for (int j : nb) f[j] -= 0.5 * R * mu.cross(rest[j] - fit.G0);
   if (m.normal_weight[k] <= 0.0) return;
   // The normal pair: dE = h'.dN, N the unnormalised neighbourhood normal.
   const Vec3 n = fit.N.normalized();
-  const Vec3 h = 0.5 * m.normal_weight[k] * R * mu.cross(m.rest_normal[k]);
+  const Vec3 h = 0.5 * m.normal_weight[k] * R * mu.cross(fit.n0);
   const Vec3 hp = (h - n.dot(h) * n) / fit.N.norm();
   const int count = int(nb.size());
   if (m.surface) {  // N = sum of e_k x e_k+1 around the ring: the centroid terms cancel
@@ -172,13 +236,15 @@ void add_rotation_reaction(const ShapeMemory& m, int k, std::span<const Vec3> re
 }  // namespace
 
 void extract_rotation(const Eigen::Matrix3d& A, Eigen::Quaterniond& q, int max_iterations) {
-  // Converged once a turn is below 1e-14 rad: forces then sit at round-off. A warm start
-  // needs one or two iterations; a start far away restarts from an SVD.
+  // Converged once a turn is below 1e-14 rad, or after a Newton turn below 1e-8 rad (the
+  // next would be of its square): forces then sit at round-off. A warm start needs one
+  // iteration; a start far away restarts from an SVD.
+  auto converged = [](const Turn& t) { return t.angle2 < 1e-28 || (t.newton && t.angle2 < 1e-16); };
   for (int it = 0; it < max_iterations; ++it)
-    if (rotation_iteration(A, q) < 1e-14) return;
+    if (converged(rotation_iteration(A, q))) return;
   q = nearest_rotation(A);
   for (int it = 0; it < max_iterations; ++it)
-    if (rotation_iteration(A, q) < 1e-14) return;
+    if (converged(rotation_iteration(A, q))) return;
 }
 
 ShapeMemory build_shape_memory(const std::string& component, const Mesh& mesh, int first_node,
@@ -203,8 +269,6 @@ ShapeMemory build_shape_memory(const std::string& component, const Mesh& mesh, i
 void memorise_rest_shape(ShapeMemory& m, std::span<const Vec3> rest) {
   m.frame_pair.clear();
   m.normal_weight.clear();
-  m.rest_centroid.clear();
-  m.rest_normal.clear();
   m.rest_offset.clear();
   for (int k = 0; k < int(m.nodes.size()); ++k) {
     const auto nb = m.neighbours.row(k);
@@ -222,16 +286,16 @@ void memorise_rest_shape(ShapeMemory& m, std::span<const Vec3> rest) {
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
     const bool flat = eig.eigenvalues()(0) < 1e-2 * eig.eigenvalues()(2);
     m.normal_weight.push_back(m.surface || flat ? C.trace() / double(nb.size()) : 0.0);
-    m.rest_centroid.push_back(G0);
-    m.rest_normal.push_back(m.normal_weight.back() > 0.0
-                                ? neighbourhood_normal(m, k, rest, G0).normalized()
-                                : Vec3::Zero());
 
     // In polar mode the rest frame is the identity by construction (A0 is symmetric).
     const Eigen::Matrix3d R0 =
         m.frame == FrameMode::frame ? local_frame(m, k, rest, G0) : Eigen::Matrix3d::Identity();
     m.rest_offset.push_back(R0.transpose() * (rest[m.nodes[k]] - G0));
   }
+  m.plan = plan_blocks(int(m.nodes.size()), [&m](int k, const std::function<void(int)>& visit) {
+    visit(m.nodes[k]);  // a node's pass writes it and its neighbours
+    for (int j : m.neighbours.row(k)) visit(j);
+  });
 }
 
 Vec3 attraction_position(const ShapeMemory& m, int k, std::span<const Vec3> rest,
@@ -255,34 +319,31 @@ void add_centroid_reaction(std::span<const int> nb, const Vec3& fi, std::span<Ve
 
 double add_polar_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::span<const Vec3> x,
                         std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f) {
-  double energy = 0.0;
-  for (int k = 0; k < int(m.nodes.size()); ++k) {
+  return run_coloured(m.plan, [&](int k) {
     const int i = m.nodes[k];
     const Fit fit = fit_neighbourhood(m, k, rest, x);
     extract_rotation(fit.A, rotations[k]);
     const Eigen::Matrix3d R = rotations[k].toRotationMatrix();
     const Vec3 pull = fit.g + R * m.rest_offset[k] - x[i];
     f[i] += m.stiffness * pull;
-    energy += 0.5 * m.stiffness * pull.squaredNorm();
-    if (!m.reaction) continue;
-    // -dE/dx through g and through R: the forces are then exactly the energy's gradient.
-    add_centroid_reaction(m.neighbours.row(k), m.stiffness * pull, f);
-    add_rotation_reaction(m, k, rest, x, fit, R, pull, f);
-  }
-  return energy;
+    if (m.reaction) {
+      // -dE/dx through g and through R: the forces are then exactly the energy's gradient.
+      add_centroid_reaction(m.neighbours.row(k), m.stiffness * pull, f);
+      add_rotation_reaction(m, k, rest, x, fit, R, pull, f);
+    }
+    return 0.5 * m.stiffness * pull.squaredNorm();
+  });
 }
 
 double add_frame_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::span<const Vec3> x,
                         std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f) {
-  double energy = 0.0;
-  for (int k = 0; k < int(m.nodes.size()); ++k) {
+  return run_coloured(m.plan, [&](int k) {
     const int i = m.nodes[k];
     const Vec3 pull = attraction_position(m, k, rest, x, rotations[k]) - x[i];
     f[i] += m.stiffness * pull;
-    energy += 0.5 * m.stiffness * pull.squaredNorm();
     if (m.reaction) add_centroid_reaction(m.neighbours.row(k), m.stiffness * pull, f);
-  }
-  return energy;
+    return 0.5 * m.stiffness * pull.squaredNorm();
+  });
 }
 
 }  // namespace

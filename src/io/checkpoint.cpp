@@ -137,6 +137,8 @@ std::string payload(const Checkpoint& c) {
   w.i64(c.static_progress.iterations);
   w.i64(c.static_progress.step_iterations);
   w.f64(c.static_progress.previous_kinetic);
+  w.f64(c.static_progress.fire_alpha);
+  w.i64(c.static_progress.fire_downhill);
   w.i64(c.steps_done);
   w.f64(c.next_frame);
   w.u64(c.frames.size());
@@ -194,6 +196,8 @@ Checkpoint parse_payload(Reader& r) {
   p.iterations = non_negative(r, r.i64("iterations"), "iterations");
   p.step_iterations = non_negative(r, r.i64("load step iterations"), "load step iterations");
   p.previous_kinetic = r.f64("previous kinetic energy");
+  p.fire_alpha = r.f64("FIRE mixing");
+  p.fire_downhill = non_negative(r, r.i64("FIRE downhill steps"), "FIRE downhill steps");
   c.steps_done = non_negative(r, r.i64("steps done"), "steps done");
   c.next_frame = r.f64("next frame time");
   c.frames.resize(r.count("frames", sizeof(double) + sizeof(std::uint64_t)));

@@ -18,6 +18,8 @@ const Condition kBox{"generator", {"box"}};
 const Condition kEllipsoid{"generator", {"ellipsoid"}};
 const Condition kCylinder{"generator", {"cylinder"}};
 const Condition kRound{"generator", {"ellipsoid", "cylinder"}};
+const Condition kShapeMemory{"model", {"shape-memory"}};
+const Condition kFem{"model", {"fem"}};
 const Condition kVolume{"surface", {"false"}};
 const Condition kDisplacement{"type", {"displacement"}};
 const Condition kRigid{"type", {"rigid"}};
@@ -217,10 +219,14 @@ std::vector<Parameter> simulation_parameters() {
        .default_value = "1",
        .doc = "Static mode: equilibria at duration * k / load_steps, k = 1..load_steps."},
       {.section = "simulation",
-       .name = "kinetic_damping",
-       .kind = Kind::boolean,
-       .default_value = "true",
-       .doc = "Static mode: zero the velocities at kinetic-energy peaks."},
+       .name = "relaxation",
+       .kind = Kind::choice,
+       .choices = {"kinetic", "fire", "viscous"},
+       .default_value = "kinetic",
+       .doc = "Static mode: how the pseudo-dynamics loses energy. kinetic: velocities zeroed "
+              "at kinetic-energy peaks; fire: turned towards the force and zeroed when going "
+              "uphill (Bitzek et al. 2006), about twice as fast without contacts, but it can "
+              "stall on them; viscous: only the scene's damping."},
   };
 }
 
@@ -402,12 +408,44 @@ std::vector<Parameter> mesh_parameters() {
 std::vector<Parameter> material_parameters() {
   return {
       {.section = "material",
+       .name = "model",
+       .kind = Kind::choice,
+       .choices = {"shape-memory", "fem"},
+       .default_value = "shape-memory",
+       .doc = "Elasticity: the paper's local shape memory, or explicit finite elements (TLED: "
+              "compressible Neo-Hookean; hexahedra with one point and hourglass control, or "
+              "tetrahedra)."},
+      {.section = "material",
        .name = "stiffness",
        .kind = Kind::quantity,
        .dimension = Dimension::stiffness,
        .range = gt(0),
-       .default_note = "required for elastic and active objects",
+       .default_note = "required for shape-memory elastic and active objects",
+       .when = {kShapeMemory},
        .doc = "Shape-memory spring of each node."},
+      {.section = "material",
+       .name = "young",
+       .kind = Kind::quantity,
+       .dimension = Dimension::pressure,
+       .range = gt(0),
+       .required = true,
+       .when = {kFem},
+       .doc = "Young's modulus of the finite elements."},
+      {.section = "material",
+       .name = "poisson",
+       .kind = Kind::quantity,
+       .range = {-1.0, 0.5, true, true},
+       .required = true,
+       .when = {kFem},
+       .doc = "Poisson's ratio of the finite elements; near 0.5 the stable time step shrinks "
+              "with the bulk wave speed."},
+      {.section = "material",
+       .name = "hourglass",
+       .kind = Kind::quantity,
+       .range = closed(0.0, 1.0),
+       .default_value = "0.3",
+       .when = {kFem},
+       .doc = "Hexahedra: hourglass stiffness as a fraction of the element's shear stiffness."},
       {.section = "material",
        .name = "density",
        .kind = Kind::quantity,
@@ -427,11 +465,13 @@ std::vector<Parameter> material_parameters() {
        .kind = Kind::choice,
        .choices = {"polar", "frame"},
        .default_value = "polar",
+       .when = {kShapeMemory},
        .doc = "How the local rotation of the rest shape is estimated."},
       {.section = "material",
        .name = "reaction",
        .kind = Kind::boolean,
        .default_value = "true",
+       .when = {kShapeMemory},
        .doc = "Apply -f/n to the neighbours of each node, so that momentum is kept."},
   };
 }

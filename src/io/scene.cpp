@@ -202,6 +202,7 @@ class SceneBuilder {
   void check_references();
 
   SceneContext& context_;
+  bool material_model_known_ = true;  // the last material's `model` was absent or valid
   std::vector<Named> names_;
   std::vector<Named> references_;
   size_t objects_ = 0;  // including those whose name is invalid
@@ -248,7 +249,10 @@ SimulationSpec SceneBuilder::simulation(SectionReader& reader) {
   reader.read("tolerance", spec.tolerance);
   reader.read("max_iterations", spec.max_iterations);
   reader.read("load_steps", spec.load_steps);
-  reader.read("kinetic_damping", spec.kinetic_damping);
+  reader.read("relaxation", spec.relaxation,
+              {{"fire", Relaxation::fire},
+               {"kinetic", Relaxation::kinetic},
+               {"viscous", Relaxation::viscous}});
   reader.done();
   return spec;
 }
@@ -299,7 +303,8 @@ void SceneBuilder::object_kind(SectionReader& reader, ObjectSpec& spec,
       context_.error(reader.value_loc("volume_constraint").value_or(reader.loc()),
                      "'volume_constraint' applies only to elastic and active objects (this "
                      "object is rigid)");
-  } else if (!stiffness_at && reader.value_loc("material") && material_at.line > 0) {
+  } else if (!stiffness_at && spec.material.model == ElasticModel::shape_memory &&
+             material_model_known_ && reader.value_loc("material") && material_at.line > 0) {
     context_.error(material_at, "'stiffness' is required in 'material'");
   }
 }
@@ -395,7 +400,15 @@ void SceneBuilder::check_mesh_source(SectionReader& reader) {
 MaterialSpec SceneBuilder::material(SectionReader& reader) {
   MaterialSpec spec;
   spec.loc = reader.loc();
+  const bool model_given = reader.value_loc("model").has_value();
+  const bool model_read =
+      reader.read("model", spec.model,
+                  {{"shape-memory", ElasticModel::shape_memory}, {"fem", ElasticModel::fem}});
+  material_model_known_ = !model_given || model_read;  // an invalid one requires nothing
   reader.read("stiffness", spec.stiffness);
+  reader.read("young", spec.young);
+  reader.read("poisson", spec.poisson);
+  reader.read("hourglass", spec.hourglass);
   reader.read("density", spec.density);
   reader.read("mass", spec.mass);
   reader.read("frame", spec.frame, {{"polar", FrameMode::polar}, {"frame", FrameMode::frame}});

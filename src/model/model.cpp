@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "constraints/doubled.hpp"
+#include "forces/explicit_fem.hpp"
 #include "forces/shape_memory.hpp"
 #include "solver/rigid.hpp"
 
@@ -92,13 +93,17 @@ int add_mesh(Model& model, const std::string& name, const Mesh& mesh,
 int add_elastic_component(Model& model, const std::string& name, const Mesh& mesh,
                           const MaterialSpec& material) {
   validate(mesh);
-  if (!(material.stiffness > 0.0))
+  if (material.model == ElasticModel::shape_memory && !(material.stiffness > 0.0))
     throw std::invalid_argument(
         fmt::format("object '{}': 'stiffness' must be > 0 N/m (got {})", name, material.stiffness));
   const int first_node = model.node_count();
   const int component = add_mesh(model, name, mesh, material);
-  model.shape_memory.push_back(
-      build_shape_memory(name, mesh, first_node, material, model.rest_position));
+  if (material.model == ElasticModel::fem)
+    model.explicit_fem.push_back(
+        build_explicit_fem(name, mesh, first_node, material, model.rest_position));
+  else
+    model.shape_memory.push_back(
+        build_shape_memory(name, mesh, first_node, material, model.rest_position));
   return component;
 }
 

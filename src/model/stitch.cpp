@@ -7,6 +7,7 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "forces/explicit_fem.hpp"
 #include "forces/shape_memory.hpp"
 #include "phymul/model.hpp"
 
@@ -97,6 +98,12 @@ void stitch_nodes(Model& model, const std::vector<std::array<int, 2>>& pairs) {
     remap(m.nodes, to);
     remap(m.neighbours.indices, to);
     memorise_rest_shape(m, model.rest_position);
+  }
+  // Finite elements keep their reference gradients: merged nodes lie within the stitch
+  // tolerance of where they were computed.
+  for (ExplicitFem& e : model.explicit_fem) {
+    remap(e.cells, to);
+    plan_explicit_fem(e);
   }
   for (VolumeConstraint& v : model.volumes) {
     remap(v.triangles, to);

@@ -2,11 +2,12 @@
 #include <cmath>
 #include <limits>
 
+#include "forces/explicit_fem.hpp"
 #include "phymul/simulator.hpp"
 
 namespace phymul {
 
-double stable_time_step(const Model& model) {
+std::vector<double> stiffness_row_sums(const Model& model) {
   // Row sums of |df/dx| per node (rotation terms neglected): a node's own pull K(a - x)
   // gives K on itself and K/n on each of its n neighbours; with the reaction option each
   // node it neighbours adds its own row share 2K/n.
@@ -28,6 +29,12 @@ double stable_time_step(const Model& model) {
         row[line[k + 1]] += 2.0 * fibres.stiffness;
       }
     }
+  for (const ExplicitFem& e : model.explicit_fem) add_explicit_fem_rows(e, row);
+  return row;
+}
+
+double stable_time_step(const Model& model) {
+  const std::vector<double> row = stiffness_row_sums(model);
   double omega2 = 0.0;
   for (int i = 0; i < model.node_count(); ++i) omega2 = std::max(omega2, row[i] / model.mass[i]);
   if (omega2 == 0.0) return std::numeric_limits<double>::infinity();

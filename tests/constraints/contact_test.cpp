@@ -145,7 +145,10 @@ TEST(Contact, BoxDroppedOnAPlaneNeverCrossesItAndRestsOnIt) {
   add_elastic_component(model, "box",
                         make_box(Vec3(0.02, 0.02, 0.02), {3, 3, 3}, CellType::hexa,
                                  Vec3(0, 0, 0.011)),  // 1 mm above the floor
-                        testing::material(30.0));
+                        // At 30 N/m the landing pushed the three-neighbour corners through
+                        // their flat position: the box came to rest on inverted corners by a
+                        // chaotic path, and relaxing it converged or not with the round-off.
+                        testing::material(300.0));
   add_rigid_obstacle(model, shape(Shape::plane, Vec3::Zero(), Vec3::UnitZ()));
   model.gravity = Vec3(0, 0, -9.81);
   model.damping = 2.0;

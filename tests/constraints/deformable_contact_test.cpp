@@ -103,7 +103,7 @@ Model two_balls(double push) {
   // Plain damped relaxation: the contact rests on a node or two of the coarse spheres, and
   // kinetic damping's restarts converge slowly there.
   model.damping = 60.0;
-  model.settings.kinetic_damping = false;
+  model.settings.relaxation = Relaxation::viscous;
   model.settings.tolerance = 1e-8;
   finalize(model);
   return model;

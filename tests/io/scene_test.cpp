@@ -24,7 +24,7 @@ const std::string kFullScene = R"(simulation:
   tolerance: 2 mN
   max_iterations: 5000
   load_steps: 4
-  kinetic_damping: false
+  relaxation: fire
 objects:
   - name: cube
     mesh:
@@ -127,7 +127,7 @@ TEST(SceneTest, FullSceneSimulation) {
   EXPECT_DOUBLE_EQ(s.tolerance, 0.002);
   EXPECT_EQ(s.max_iterations, 5000);
   EXPECT_EQ(s.load_steps, 4);
-  EXPECT_FALSE(s.kinetic_damping);
+  EXPECT_EQ(s.relaxation, Relaxation::fire);
   expect_loc(s.loc, 1, 1);
 }
 
@@ -291,7 +291,7 @@ TEST(SceneTest, OmittedFieldsTakeTheDefaultsOfTheStructs) {
   EXPECT_EQ(s.tolerance, d.tolerance);
   EXPECT_EQ(s.max_iterations, d.max_iterations);
   EXPECT_EQ(s.load_steps, d.load_steps);
-  EXPECT_EQ(s.kinetic_damping, d.kinetic_damping);
+  EXPECT_EQ(s.relaxation, d.relaxation);
   EXPECT_EQ(s.loc.line, 0);  // no simulation section
 
   ASSERT_EQ(scene.objects.size(), 1u);

@@ -1,0 +1,211 @@
+// Explicit finite elements (TLED): frame invariance, forces as the energy's gradient, the
+// patch test against the analytic Neo-Hookean stress, and static equilibrium against the
+// implicit reference FEM.
+#include "forces/explicit_fem.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "phymul/fem.hpp"
+#include "phymul/simulator.hpp"
+#include "support/models.hpp"
+
+namespace phymul {
+namespace {
+
+constexpr double kYoung = 20e3, kPoisson = 0.3;  // Pa
+
+MaterialSpec fem_material(double poisson = kPoisson) {
+  MaterialSpec m;
+  m.model = ElasticModel::fem;
+  m.young = kYoung;
+  m.poisson = poisson;
+  m.density = 1000.0;
+  return m;
+}
+
+Model block(CellType type, int n = 3, double poisson = kPoisson) {
+  Model model;
+  add_elastic_component(model, "block", make_box(Vec3(0.03, 0.02, 0.025), {n, n, n}, type),
+                        fem_material(poisson));
+  finalize(model);
+  return model;
+}
+
+struct Evaluation {
+  std::vector<Vec3> f;
+  double energy;
+};
+
+Evaluation evaluate(const Model& model, const std::vector<Vec3>& x) {
+  Evaluation out{std::vector<Vec3>(x.size(), Vec3::Zero()), 0.0};
+  out.energy = add_explicit_fem_forces(model.explicit_fem[0], model.rest_position, x, out.f);
+  return out;
+}
+
+class ExplicitFemCells : public ::testing::TestWithParam<CellType> {};
+
+TEST_P(ExplicitFemCells, RigidMotionGivesNoForceAndNoEnergy) {
+  const Model model = block(GetParam());
+  std::mt19937 rng(7);
+  const Eigen::Matrix3d R = testing::random_rotation(rng);
+  std::vector<Vec3> x;
+  for (const Vec3& p : model.rest_position) x.push_back(R * p + Vec3(0.3, -0.2, 0.1));
+  const Evaluation e = evaluate(model, x);
+  // Force scale: E times a cell face, 20e3 * 1e-4 = 2 N.
+  for (const Vec3& f : e.f) EXPECT_LT(f.norm(), 1e-11);
+  EXPECT_LT(std::abs(e.energy), 1e-15);
+}
+
+TEST_P(ExplicitFemCells, ForcesAreMinusTheEnergyGradient) {
+  const Model model = block(GetParam());
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1e-3, 1e-3);
+  std::vector<Vec3> x = model.rest_position;
+  for (Vec3& p : x) p += Vec3(u(rng), u(rng), u(rng));
+  const Evaluation at = evaluate(model, x);
+  double largest = 0.0;
+  for (const Vec3& f : at.f) largest = std::max(largest, f.norm());
+  const double h = 1e-7;
+  for (int i = 0; i < model.node_count(); i += 5) {
+    for (int d = 0; d < 3; ++d) {
+      std::vector<Vec3> plus = x, minus = x;
+      plus[i][d] += h;
+      minus[i][d] -= h;
+      const double slope = (evaluate(model, plus).energy - evaluate(model, minus).energy) / (2 * h);
+      EXPECT_NEAR(at.f[i][d], -slope, 1e-6 * largest) << "node " << i << " axis " << d;
+    }
+  }
+}
+
+// A homogeneous deformation x = F X: every interior node is in balance and the nodes of the
+// face x = +a carry P n A, P = mu J^-2/3 (F - I1/3 F^-T) + kappa J (J - 1) F^-T.
+TEST_P(ExplicitFemCells, PatchTestMatchesTheAnalyticStress) {
+  const Model model = block(GetParam(), 4);
+  Eigen::Matrix3d F;
+  F << 1.12, 0.05, 0.0, 0.02, 0.95, 0.03, 0.0, -0.04, 0.97;
+  std::vector<Vec3> x;
+  for (const Vec3& p : model.rest_position) x.push_back(F * p);
+  const Evaluation e = evaluate(model, x);
+  const double mu = kYoung / (2 * (1 + kPoisson)), kappa = kYoung / (3 * (1 - 2 * kPoisson));
+  const double J = F.determinant();
+  const Eigen::Matrix3d H = F.inverse().transpose();
+  const Eigen::Matrix3d P =
+      mu * std::pow(J, -2.0 / 3.0) * (F - F.squaredNorm() / 3.0 * H) + kappa * J * (J - 1) * H;
+  const double a = 0.015, area = 0.02 * 0.025;
+  Vec3 face = Vec3::Zero();
+  for (int i = 0; i < model.node_count(); ++i) {
+    const Vec3& p = model.rest_position[i];
+    const bool boundary = std::abs(std::abs(p.x()) - 0.015) < 1e-12 ||
+                          std::abs(std::abs(p.y()) - 0.01) < 1e-12 ||
+                          std::abs(std::abs(p.z()) - 0.0125) < 1e-12;
+    if (!boundary) {
+      EXPECT_LT(e.f[i].norm(), 1e-10) << "interior node " << i;
+    }
+    if (std::abs(p.x() - a) < 1e-12) face += e.f[i];
+  }
+  // The internal forces on the face nodes are minus the traction the face needs.
+  const Vec3 expected = -P * Vec3::UnitX() * area;
+  EXPECT_NEAR((face - expected).norm(), 0.0, 1e-9 * expected.norm()) << face.transpose();
+}
+
+INSTANTIATE_TEST_SUITE_P(Cells, ExplicitFemCells,
+                         ::testing::Values(CellType::hexa, CellType::tetra));
+
+TEST(ExplicitFem, RejectsBadModuliAndSurfaceMeshes) {
+  Model model;
+  MaterialSpec m = fem_material(0.5);
+  EXPECT_THROW(add_elastic_component(
+                   model, "b", make_box(Vec3(0.01, 0.01, 0.01), {2, 2, 2}, CellType::hexa), m),
+               std::invalid_argument);
+  m = fem_material();
+  m.density.reset();
+  m.mass = 0.01;
+  EXPECT_THROW(
+      add_elastic_component(model, "s", make_ellipsoid_surface(Vec3(0.01, 0.01, 0.01), 1), m),
+      std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace phymul
+
+namespace phymul {
+namespace {
+
+// A 40 mm cube of n^3 cells, base held, top pushed down 4 mm without slip: the top reaction
+// of the explicit elements relaxed to equilibrium, and of the implicit reference FEM.
+struct Compression {
+  double explicit_force, reference_force;
+  double explicit_bulge, reference_bulge;  // m, x displacement of the mid-height corner
+};
+
+Compression compress(CellType type, int n) {
+  const Mesh mesh = make_box(Vec3(0.04, 0.04, 0.04), {n, n, n}, type);
+  const auto& top = mesh.node_sets.at("top");
+  const auto& bottom = mesh.node_sets.at("bottom");
+  int corner = 0;  // the node at (+x, +y) mid-height... the nearest one
+  for (int i = 0; i < int(mesh.points.size()); ++i)
+    if ((mesh.points[i] - Vec3(0.02, 0.02, 0.0)).norm() <
+        (mesh.points[corner] - Vec3(0.02, 0.02, 0.0)).norm())
+      corner = i;
+
+  Model model;
+  add_elastic_component(model, "cube", mesh, fem_material());
+  add_fixed_nodes(model, bottom);
+  add_prescribed_displacement(
+      model, {top, {true, true, true}, Schedule{{0.0, 1.0}, {Vec3::Zero(), Vec3(0, 0, -0.004)}}});
+  model.settings.mode = SolveMode::static_equilibrium;
+  model.settings.load_steps = 2;
+  model.settings.tolerance = 1e-9;  // N, against a top force of about 0.8 N
+  finalize(model);
+  Simulator sim(model);
+  const StaticResult r = sim.solve_static();
+  EXPECT_TRUE(r.converged) << r.residual;
+  const std::vector<Vec3> reaction = sim.support_reactions();
+  Compression out{};
+  for (int i : top) out.explicit_force -= reaction[i].z();  // the plate pushes down
+  out.explicit_bulge = sim.state().x[corner].x() - mesh.points[corner].x();
+
+  fem::Problem problem;
+  problem.mesh = mesh;
+  problem.material = {fem::Law::neo_hookean, kYoung, kPoisson};
+  for (int i : bottom)
+    for (int a = 0; a < 3; ++a) problem.prescribed.push_back({i, a, 0.0});
+  for (int i : top)
+    for (int a = 0; a < 3; ++a) problem.prescribed.push_back({i, a, a == 2 ? -0.004 : 0.0});
+  problem.load_steps = 2;
+  const fem::Result solved = fem::solve_static(problem);
+  EXPECT_TRUE(solved.converged) << solved.message;
+  for (int i : top) out.reference_force -= solved.reaction[i].z();
+  out.reference_bulge = solved.displacement[corner].x();
+  return out;
+}
+
+TEST(ExplicitFem, CompressedCubeMatchesTheImplicitReference) {
+  // Tetrahedra: the same discretisation as the reference (one point, constant strain), so
+  // the same equilibrium, to the relaxation tolerance.
+  for (int n : {4, 8}) {
+    const Compression c = compress(CellType::tetra, n);
+    EXPECT_NEAR(c.explicit_force, c.reference_force, 1e-6 * c.reference_force) << n;
+    EXPECT_NEAR(c.explicit_bulge, c.reference_bulge, 1e-5 * c.reference_bulge) << n;
+  }
+  // Hexahedra: one point and hourglass control against 2x2x2 points and mean dilatation.
+  // Measured: force 0.33 % (4^3) and 0.07 % (8^3) above, bulge 0.2 % and 0.2 %; the gap
+  // closes as the mesh is refined.
+  double previous_gap = 1.0;
+  for (int n : {4, 8}) {
+    const Compression c = compress(CellType::hexa, n);
+    const double gap = std::abs(c.explicit_force / c.reference_force - 1.0);
+    std::printf("hexa %d^3: top force %.6g N (reference %.6g N), bulge %.4g mm (%.4g mm)\n", n,
+                c.explicit_force, c.reference_force, c.explicit_bulge * 1e3,
+                c.reference_bulge * 1e3);
+    EXPECT_LT(gap, 5e-3) << n;
+    EXPECT_NEAR(c.explicit_bulge, c.reference_bulge, 6e-3 * c.reference_bulge) << n;
+    EXPECT_LT(gap, previous_gap) << n;
+    previous_gap = gap;
+  }
+}
+
+}  // namespace
+}  // namespace phymul
