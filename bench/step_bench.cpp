@@ -27,10 +27,15 @@ phymul::Model cube_on_base(int n,
   return model;
 }
 
+// The cube's top pushed down 8 mm (10 %) in 50 ms without slip, then held: damped dynamics.
+// (Until this session the block sagged under gravity instead; the shape memory hardly
+// resists a uniform strain, so it collapsed into a tangle that the runaway guard now stops.)
 phymul::Model block(int n, phymul::ElasticModel elasticity) {
   using namespace phymul;
   Model model = cube_on_base(n, elasticity);
-  model.gravity = Vec3(0, 0, -9.81);
+  add_prescribed_displacement(model, {model.components[0].node_sets.at("top"),
+                                      {true, true, true},
+                                      Schedule{{0.0, 0.05}, {Vec3::Zero(), Vec3(0, 0, -0.008)}}});
   model.damping = 5.0;
   finalize(model);
   return model;
@@ -53,7 +58,7 @@ void step_benchmark(benchmark::State& state, phymul::ElasticModel elasticity) {
 }
 
 // One full step: shape memory (polar, reaction) or explicit finite elements (TLED), with the
-// volume constraint, the fixed base, gravity and damping.
+// volume constraint, the fixed base, the pushed top and damping.
 void BM_Step(benchmark::State& state) { step_benchmark(state, phymul::ElasticModel::shape_memory); }
 void BM_StepFem(benchmark::State& state) { step_benchmark(state, phymul::ElasticModel::fem); }
 BENCHMARK(BM_Step)

@@ -419,7 +419,7 @@ StaticResult Simulator::continue_relax(double load_time, long max_iterations,
 // P = f.v > 0) the velocity is turned towards the force, v <- (1 - alpha) v + alpha |v| f/|f|
 // in the mass metric, alpha shrinking after five downhill steps; uphill it restarts from
 // rest. The force is the tangent one (volume pressure removed), as the motion's. On the
-// Truth Cube compression it takes 315 iterations at 8^3 and 781 at 16^3 where kinetic
+// Truth Cube compression it takes 303 iterations at 8^3 and 759 at 16^3 where kinetic
 // damping took 430 and 1,391.
 void Simulator::fire_update(StaticProgress& fire) {
   std::vector<Vec3>& a = f_start_;  // free between steps
