@@ -1,5 +1,6 @@
 // phymul command line: thin, parses arguments and calls the library.
 #include <fmt/format.h>
+#include <omp.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -46,6 +47,7 @@ int check(const std::string& file) {
 struct RunArguments {
   std::string scene, out = "out", checkpoint_every, resume;
   bool quiet = false;
+  int threads = 0;      // 0: OpenMP's default (OMP_NUM_THREADS, else every core)
   long stop_after = 0;  // hidden, for tests
 };
 
@@ -53,6 +55,7 @@ int run(RunArguments a) {
   try {
     phymul::RunOptions options;
     options.progress = !a.quiet && isatty(fileno(stderr));
+    if (a.threads > 0) omp_set_num_threads(a.threads);
     options.stop_after_steps = a.stop_after;
     if (!a.checkpoint_every.empty())
       options.checkpoint_every = phymul::parse_checkpoint_interval(a.checkpoint_every);
@@ -108,6 +111,11 @@ int main(int argc, char** argv) {
   auto* output =
       run_cmd->add_option("-o,--output", run_args.out, "output directory")->capture_default_str();
   run_cmd->add_flag("-q,--quiet", run_args.quiet, "no progress and no summary");
+  run_cmd
+      ->add_option("--threads", run_args.threads,
+                   "threads (default: OMP_NUM_THREADS, else every core); results are the same "
+                   "bit for bit whatever their number")
+      ->check(CLI::Range(1, 1024));
   run_cmd->add_option("--checkpoint-every", run_args.checkpoint_every,
                       "write DIR/checkpoint.bin every N steps ('500 steps') or simulated "
                       "time ('0.2 s'); an interrupted run writes one anyway");

@@ -41,6 +41,7 @@ struct RunReport {
   double ns_per_node_per_step = 0.0;
   double dt = 0.0, stable_dt = 0.0;  // s
   int nodes = 0;
+  int threads = 1;  // OpenMP threads the run used
   int frames = 0;
   bool converged = false;  // static mode
   double residual = 0.0;   // N, static mode: final largest residual force

@@ -1,6 +1,7 @@
 #include "phymul/run.hpp"
 
 #include <fmt/format.h>
+#include <omp.h>
 
 #include <chrono>
 #include <cmath>
@@ -292,6 +293,7 @@ RunReport run_scene(const Scene& scene, const RunOptions& options) {
 
   RunReport report;
   report.nodes = model.node_count();
+  report.threads = omp_get_max_threads();
   report.dt = sim.dt();
   report.stable_dt = stable_time_step(model);
   ProgressLine progress(options.progress);

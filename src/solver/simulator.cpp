@@ -237,7 +237,15 @@ void Simulator::check_stability() const {
                     stable_time_step(model_)),
         i, s.time);
   };
-  for (int i = 0; i < model_.node_count(); ++i) {
+  const int n = model_.node_count();
+  bool all_well = true;  // a parallel look first; the first bad node is then found in order
+#pragma omp parallel for schedule(static) if (n >= kParallelFrom) reduction(&& : all_well)
+  for (int i = 0; i < n; ++i) {
+    const double moved = (s.x[i] - model_.rest_position[i]).norm();
+    all_well =
+        all_well && std::isfinite(moved) && s.v[i].allFinite() && moved <= 10.0 * size_scale_;
+  }
+  for (int i = 0; i < n && !all_well; ++i) {
     const double moved = (s.x[i] - model_.rest_position[i]).norm();
     const bool finite = std::isfinite(moved) && s.v[i].allFinite();
     if (finite && moved <= 10.0 * size_scale_) continue;
