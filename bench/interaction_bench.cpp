@@ -3,9 +3,7 @@
 // Reports the time per node per step.
 #include <benchmark/benchmark.h>
 
-#include <chrono>
-
-#include "phymul/simulator.hpp"
+#include "cube.hpp"
 
 namespace {
 
@@ -21,13 +19,7 @@ MaterialSpec tissue(double stiffness) {
 // Steps timed after `warmup` steps (so the contact is established), as ns per node.
 void time_steps(benchmark::State& state, Simulator& sim, int warmup) {
   for (int k = 0; k < warmup; ++k) sim.step();
-  const auto start = std::chrono::steady_clock::now();
-  for (auto _ : state) sim.step();
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const double nodes = sim.model().node_count();
-  state.counters["nodes"] = nodes;
-  state.counters["ns_per_node_step"] = seconds * 1e9 / (nodes * double(state.iterations()));
+  bench::time_steps(state, sim);
 }
 
 // An 80 mm cube of n^3 hexahedra, top fixed, volume kept, gravity, with a 1 cm probe whose

@@ -1,4 +1,4 @@
-// Resident memory of a shape-memory model in a run: the 40^3-cell step benchmark's block,
+// Resident memory of a shape-memory model in a run: the step benchmark's pushed cube,
 // built and stepped in a fresh process so that nothing else is counted. Prints one JSON
 // object; `make bench` stores it in bench/memory.json.
 #include <fmt/format.h>
@@ -8,7 +8,7 @@
 #include <fstream>
 #include <string>
 
-#include "phymul/simulator.hpp"
+#include "cube.hpp"
 
 namespace {
 
@@ -31,17 +31,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   const long baseline = status_kib("VmRSS");
-  Model model;
-  MaterialSpec material;
-  material.stiffness = 20.0;
-  material.density = 1000.0;
-  const int c = add_elastic_component(
-      model, "cube", make_box(Vec3(0.08, 0.08, 0.08), {n, n, n}, CellType::hexa), material);
-  add_volume_constraint(model, c);
-  add_fixed_nodes(model, model.components[c].node_sets.at("bottom"));
-  model.gravity = Vec3(0, 0, -9.81);
-  model.damping = 5.0;
-  finalize(model);
+  Model model = bench::pushed_cube(n);
   const double nodes = model.node_count();
   Simulator sim(std::move(model));
   for (int k = 0; k < 10; ++k) sim.step();

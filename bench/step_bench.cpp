@@ -1,60 +1,20 @@
-// One full step (shape memory + volume constraint + fixed base + gravity) on hexahedral
+// One full step (shape memory or TLED + volume constraint + fixed base + pushed top) on hexahedral
 // grids of n^3 cells; reports the time per node per step.
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
-#include <chrono>
-
-#include "phymul/simulator.hpp"
+#include "cube.hpp"
 
 namespace {
 
-// An 80 mm cube of n^3 hexahedra, volume kept, on a fixed base; not finalized.
-phymul::Model cube_on_base(int n,
-                           phymul::ElasticModel elasticity = phymul::ElasticModel::shape_memory) {
-  using namespace phymul;
-  Model model;
-  MaterialSpec material;
-  material.model = elasticity;
-  material.stiffness = 20.0;
-  material.young = 14.9e3;  // the Truth Cube's silicone, compressible enough for explicit steps
-  material.poisson = 0.45;
-  material.density = 1000.0;
-  const int c = add_elastic_component(
-      model, "cube", make_box(Vec3(0.08, 0.08, 0.08), {n, n, n}, CellType::hexa), material);
-  add_volume_constraint(model, c);
-  add_fixed_nodes(model, model.components[c].node_sets.at("bottom"));
-  return model;
-}
-
-// The cube's top pushed down 8 mm (10 %) in 50 ms without slip, then held: damped dynamics.
-// (Until this session the block sagged under gravity instead; the shape memory hardly
-// resists a uniform strain, so it collapsed into a tangle that the runaway guard now stops.)
-phymul::Model block(int n, phymul::ElasticModel elasticity) {
-  using namespace phymul;
-  Model model = cube_on_base(n, elasticity);
-  add_prescribed_displacement(model, {model.components[0].node_sets.at("top"),
-                                      {true, true, true},
-                                      Schedule{{0.0, 0.05}, {Vec3::Zero(), Vec3(0, 0, -0.008)}}});
-  model.damping = 5.0;
-  finalize(model);
-  return model;
-}
+using phymul::bench::cube_on_base;
 
 // range(0): cells per edge, range(1): OpenMP threads.
 void step_benchmark(benchmark::State& state, phymul::ElasticModel elasticity) {
-  const int n = int(state.range(0));
   omp_set_num_threads(int(state.range(1)));
-  phymul::Simulator sim(block(n, elasticity));
-  // Timed here as well so that the table shows plain nanoseconds per node and step.
-  const auto start = std::chrono::steady_clock::now();
-  for (auto _ : state) sim.step();
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const double nodes = sim.model().node_count();
-  state.counters["nodes"] = nodes;
+  phymul::Simulator sim(phymul::bench::pushed_cube(int(state.range(0)), elasticity));
+  phymul::bench::time_steps(state, sim);
   state.counters["threads"] = double(state.range(1));
-  state.counters["ns_per_node_step"] = seconds * 1e9 / (nodes * double(state.iterations()));
 }
 
 // One full step: shape memory (polar, reaction) or explicit finite elements (TLED), with the

@@ -101,6 +101,8 @@ class Simulator {
   StaticResult static_load_steps(const std::function<void(long, double)>& progress);
   void accelerations(std::vector<Vec3>& a, bool tangent = true);
   void remove_contact_forces(std::vector<Vec3>& r) const;
+  void remove_volume_pressures(std::vector<Vec3>& r, std::vector<Vec3>& grad,
+                               bool on_free_axes) const;
   struct ContactStep begin_contact_step(double dt);
   void end_contact_step(double dt);
   void scale_masses_for_relaxation();

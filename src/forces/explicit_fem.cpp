@@ -6,6 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "fem/constitutive.hpp"
 #include "fem/element.hpp"
 
 namespace phymul {
@@ -14,16 +15,6 @@ namespace {
 using Mat3 = Eigen::Matrix3d;
 template <int N>
 using Gradient = Eigen::Matrix<double, N, 3>;
-
-// J - 1 from H = F - I without cancellation: small strains keep their relative accuracy.
-double det_minus_one(const Mat3& h) {
-  const double trace = h.trace();
-  return trace + 0.5 * (trace * trace - (h * h).trace()) + h.determinant();
-}
-
-// Corner signs of the hexahedron in VTK order, as in the reference FEM.
-constexpr int kSign[8][3] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
-                             {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
 
 void fail_cell(const std::string& component, int cell, double det) {
   throw std::invalid_argument(fmt::format(
@@ -42,9 +33,10 @@ void add_hexa(ExplicitFem& fem, const std::string& component, int cell, const Ce
   const Gradient<8> G = local * jac.inverse();
   // Flanagan-Belytschko: the hourglass base vectors made orthogonal to every linear field,
   // so rigid motions and homogeneous strains feel no hourglass force.
+  // The corner signs are those of the centre gradient (each entry is +-1/8).
   Eigen::Matrix<double, 8, 4> h;
   for (int a = 0; a < 8; ++a) {
-    const int s0 = kSign[a][0], s1 = kSign[a][1], s2 = kSign[a][2];
+    const double s0 = 8.0 * local(a, 0), s1 = 8.0 * local(a, 1), s2 = 8.0 * local(a, 2);
     h.row(a) << s0 * s1, s1 * s2, s0 * s2, s0 * s1 * s2;
   }
   const Eigen::Matrix<double, 8, 4> gamma = h - G * (X * h);
@@ -89,7 +81,7 @@ double cell_forces(const ExplicitFem& fem, int e, std::span<const Vec3> rest,
   for (int a = 0; a < N; ++a) U.col(a) = x[nodes[a]] - rest[nodes[a]];
   const Mat3 grad_u = U * G;
   const Mat3 F = Mat3::Identity() + grad_u;
-  const double j_minus_one = det_minus_one(grad_u);
+  const double j_minus_one = ::phymul::fem::det_minus_one(grad_u);
   const double J = 1.0 + j_minus_one;
   const Mat3 H = F.inverse().transpose();
   const double i1 = F.squaredNorm();

@@ -274,32 +274,41 @@ double Simulator::max_residual_force() {
   for (int i = 0; i < model_.node_count(); ++i)
     r[i] = state_.f[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
   gather_doubled(model_, r);
-  // Surfaces sharing nodes: Gauss-Seidel sweeps until what is left to take out is far
-  // below the tolerance (one pass is exact for disjoint ones).
-  const int sweeps = model_.coupled_volumes ? 200 : 1;
-  for (int sweep = 0; sweep < sweeps; ++sweep) {
-    double largest_change = 0.0;
-    for (const VolumeConstraint& c : model_.volumes) {
-      volume_gradient(c, state_.x, scratch_);
-      double rg = 0.0, gg = 0.0, longest = 0.0;
-      for (int i : c.nodes) {
-        scratch_[i] = scratch_[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
-        rg += r[i].dot(scratch_[i]);
-        gg += scratch_[i].squaredNorm();
-        longest = std::max(longest, scratch_[i].norm());
-      }
-      if (gg == 0.0) continue;
-      const double pressure = rg / gg;  // the part of the force the constraint balances
-      for (int i : c.nodes) r[i] -= pressure * scratch_[i];
-      largest_change = std::max(largest_change, std::abs(pressure) * longest);
-    }
-    if (largest_change <= 1e-3 * model_.settings.tolerance) break;
-  }
+  remove_volume_pressures(r, scratch_, /*on_free_axes=*/true);
   remove_contact_forces(r);
   if (deformable_) add_deformable_contact_forces(*deformable_, dt_, r);
   double largest = 0.0;
   for (int i = 0; i < model_.node_count(); ++i) largest = std::max(largest, r[i].norm());
   return std::max(largest, rigid_residual(model_, state_));
+}
+
+// Takes out of r the part each volume constraint balances: its pressure, the least-squares
+// multiplier of its gradient against r on the free axes. Removed along the free part of the
+// gradient (residual) or the whole gradient (support reactions, which then carry the held
+// part). Surfaces sharing nodes: Gauss-Seidel sweeps until what is left to take out is far
+// below the tolerance (one pass is exact for disjoint ones).
+void Simulator::remove_volume_pressures(std::vector<Vec3>& r, std::vector<Vec3>& grad,
+                                        bool on_free_axes) const {
+  const int sweeps = model_.coupled_volumes ? 200 : 1;
+  for (int sweep = 0; sweep < sweeps; ++sweep) {
+    double largest_change = 0.0;
+    for (const VolumeConstraint& c : model_.volumes) {
+      volume_gradient(c, state_.x, grad);
+      double rg = 0.0, gg = 0.0, longest = 0.0;
+      for (int i : c.nodes) {
+        const Vec3 free_grad = grad[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
+        if (on_free_axes) grad[i] = free_grad;
+        rg += r[i].dot(free_grad);
+        gg += free_grad.squaredNorm();
+        longest = std::max(longest, grad[i].norm());
+      }
+      if (gg == 0.0) continue;
+      const double pressure = rg / gg;
+      for (int i : c.nodes) r[i] -= pressure * grad[i];
+      largest_change = std::max(largest_change, std::abs(pressure) * longest);
+    }
+    if (largest_change <= 1e-3 * model_.settings.tolerance) break;
+  }
 }
 
 // A node touching an obstacle can be pushed into it with any force: that part of its
@@ -333,25 +342,7 @@ std::vector<Vec3> Simulator::support_reactions() const {
   // against the forces on the free axes (what max_residual_force takes out).
   std::vector<Vec3> reaction(state_.f);
   std::vector<Vec3> grad(state_.x.size(), Vec3::Zero());
-  // Coupled surfaces: Gauss-Seidel sweeps, as in max_residual_force.
-  const int sweeps = model_.coupled_volumes ? 200 : 1;
-  for (int sweep = 0; sweep < sweeps; ++sweep) {
-    double largest_change = 0.0;
-    for (const VolumeConstraint& c : model_.volumes) {
-      volume_gradient(c, state_.x, grad);
-      double fg = 0.0, gg = 0.0, longest = 0.0;
-      for (int i : c.nodes) {
-        const Vec3 free_grad = grad[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
-        fg += reaction[i].dot(free_grad);
-        gg += free_grad.squaredNorm();
-        longest = std::max(longest, grad[i].norm());
-      }
-      if (gg == 0.0) continue;
-      for (int i : c.nodes) reaction[i] -= (fg / gg) * grad[i];
-      largest_change = std::max(largest_change, std::abs(fg / gg) * longest);
-    }
-    if (largest_change <= 1e-3 * model_.settings.tolerance) break;
-  }
+  remove_volume_pressures(reaction, grad, /*on_free_axes=*/false);
   for (int i = 0; i < model_.node_count(); ++i) {
     const Vec3 held = Vec3::Ones() - free_axes(model_.inverse_mass[i]);
     reaction[i] = -reaction[i].cwiseProduct(held);
