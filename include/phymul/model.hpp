@@ -20,15 +20,18 @@ struct ShapeMemory {
   std::string component;
   double stiffness = 0.0;  // N/m
   FrameMode frame = FrameMode::polar;
-  bool reaction = true;           // spread -f/n over the neighbours so momentum is kept
-  std::vector<int> nodes;         // global ids of the nodes that carry a memory
-  Adjacency neighbours;           // per memory node, global ids; the ordered one-ring on surfaces
-  std::vector<Vec3> rest_offset;  // c = R0^T (X - G0), m; G0 the rest centroid
+  bool reaction = true;    // spread -f/n over the neighbours so momentum is kept
+  std::vector<int> nodes;  // global ids of the nodes that carry a memory
+  Adjacency neighbours;    // per memory node, global ids; the ordered one-ring on surfaces
+  // c = R0^T (X - G0), m; G0 the rest centroid. `frame` mode only: in polar mode R0 is the
+  // identity and the force pass recomputes c from the rest positions (24 bytes a node less).
+  std::vector<Vec3> rest_offset;
   // Planar neighbourhoods (every surface node, flat interior ones) leave the best-fit
   // rotation free about their normal: such nodes add the normal pair with this weight (m^2).
-  std::vector<double> normal_weight;  // zero for the others
+  std::vector<double> normal_weight;  // zero for the others; empty when all are zero
   // Two neighbours (positions within the row) spanning the node's frame: the most
-  // orthogonal pair at rest. Used by the `frame` mode and for flat interior normals.
+  // orthogonal pair at rest. Used by the `frame` mode and for flat interior normals: empty
+  // on surfaces, and in polar mode without normal pairs.
   std::vector<std::array<int, 2>> frame_pair;
   bool surface = false;  // neighbours are ordered rings (normal from the ring)
   ParallelPlan plan;     // memory nodes k in coloured blocks (solver/parallel_plan.hpp)

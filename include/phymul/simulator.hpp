@@ -3,6 +3,7 @@
 
 #include <functional>
 #include <memory>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -99,7 +100,9 @@ class Simulator {
   StaticResult continue_relax(double load_time, long max_iterations,
                               const std::function<void(long, double)>& progress, double tolerance);
   StaticResult static_load_steps(const std::function<void(long, double)>& progress);
-  void accelerations(std::vector<Vec3>& a, bool tangent = true);
+  // Tangent to the volume constraints unless volume_scratch (their gradients, node count) is
+  // empty.
+  void accelerations(std::vector<Vec3>& a, std::span<Vec3> volume_scratch);
   void remove_contact_forces(std::vector<Vec3>& r) const;
   void remove_volume_pressures(std::vector<Vec3>& r, std::vector<Vec3>& grad,
                                bool on_free_axes) const;
@@ -113,17 +116,21 @@ class Simulator {
   double dt_ = 0.0;
   double load_time_ = 0.0;  // time at which State::f was evaluated
   StaticProgress static_progress_;
-  // Sized once: no allocation in a step.
+  // Sized once: no allocation in a step. Memory is the limit on large models (README), so
+  // node-sized buffers double up where their lives do not overlap: the volume gradients go
+  // to f_start_ (the accelerations) once spent, or to x_start_ before it is filled and
+  // between steps. Only the Newton-Cotes scheme needs a1_ and scratch_.
   std::vector<Vec3> x_start_, v_start_, f_start_, a1_, scratch_;
-  std::vector<int> touching_;          // per node: obstacle in contact this step, or -1
-  std::vector<Vec3> contact_impulse_;  // per obstacle, N s, this step
-  std::vector<Vec3> pair_impulse_;     // per contact pair, N s, this step
+  std::vector<int> touching_;  // per node: obstacle in contact this step, or -1; obstacles only
+  std::vector<Vec3> contact_impulse_;                       // per obstacle, N s, this step
+  std::vector<Vec3> pair_impulse_;                          // per contact pair, N s, this step
   std::shared_ptr<DeformableContactWorkspace> deformable_;  // null without contact pairs
   double size_scale_ = 1.0;                                 // m, diagonal of the rest bounding box
   std::vector<double> shortest_edge_;  // m per node, for the runaway guard (runaway_guard.hpp)
   // Inertia of each node in the pseudo-dynamics: its mass, or in static mode a fictitious
-  // mass that gives every node the same Gershgorin frequency.
+  // mass that gives every node the same Gershgorin frequency (inertia_ empty: the masses).
   std::vector<double> inertia_;
+  const std::vector<double>& inertia() const { return inertia_.empty() ? model_.mass : inertia_; }
 };
 
 }  // namespace phymul

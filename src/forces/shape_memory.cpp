@@ -4,6 +4,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -30,6 +31,11 @@ Vec3 ring_normal(std::span<const int> ring, std::span<const Vec3> p, const Vec3&
 Vec3 pair_normal(std::span<const int> nb, const std::array<int, 2>& pair, std::span<const Vec3> p,
                  const Vec3& g) {
   return (p[nb[pair[0]]] - g).cross(p[nb[pair[1]]] - g);
+}
+
+// Empty normal_weight: no node adds a normal pair (ShapeMemory).
+double normal_weight(const ShapeMemory& m, int k) {
+  return m.normal_weight.empty() ? 0.0 : m.normal_weight[k];
 }
 
 Vec3 neighbourhood_normal(const ShapeMemory& m, int k, std::span<const Vec3> p, const Vec3& g) {
@@ -75,6 +81,15 @@ Eigen::Matrix3d covariance_about(std::span<const int> nb, std::span<const Vec3> 
   Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
   for (int j : nb) C += (p[j] - g) * (p[j] - g).transpose();
   return C;
+}
+
+// c = R0^T (X - G0), G0 the rest centroid of the neighbours. The frame mode stores it; in
+// polar mode R0 is the identity and c is recomputed, bit for bit as memorise_rest_shape
+// would, from rest positions the pass reads anyway: 24 bytes a node less.
+Vec3 rest_offset(const ShapeMemory& m, int k, std::span<const Vec3> rest) {
+  if (m.frame == FrameMode::frame) return m.rest_offset[k];
+  const Eigen::Matrix3d R0 = Eigen::Matrix3d::Identity();
+  return R0.transpose() * (rest[m.nodes[k]] - centroid(m.neighbours.row(k), rest));
 }
 
 }  // namespace
@@ -189,10 +204,10 @@ Fit fit_neighbourhood(const ShapeMemory& m, int k, std::span<const Vec3> rest,
   fit.g = x[i] + sum_d / count;
   fit.G0 = rest[i] + sum_r / count;
   fit.A = P - sum_d * (sum_r / count).transpose();
-  if (m.normal_weight[k] > 0.0) {
+  if (const double weight = normal_weight(m, k); weight > 0.0) {
     fit.N = neighbourhood_normal(m, k, x, fit.g);
     fit.n0 = neighbourhood_normal(m, k, rest, fit.G0).normalized();
-    fit.A += m.normal_weight[k] * fit.N.normalized() * fit.n0.transpose();
+    fit.A += weight * fit.N.normalized() * fit.n0.transpose();
   }
   return fit;
 }
@@ -203,18 +218,19 @@ Fit fit_neighbourhood(const ShapeMemory& m, int k, std::span<const Vec3> rest,
 // neighbour that enters A (and to the normal pair of flat neighbourhoods).
 void add_rotation_reaction(const ShapeMemory& m, int k, std::span<const Vec3> rest,
                            std::span<const Vec3> x, const Fit& fit, const Eigen::Matrix3d& R,
-                           const Vec3& pull, std::span<Vec3> f) {
+                           const Vec3& c, const Vec3& pull, std::span<Vec3> f) {
   const auto nb = m.neighbours.row(k);
   const Eigen::Matrix3d M = rotation_hessian(R.transpose() * fit.A);
-  const Vec3 p = m.stiffness * m.rest_offset[k].cross(R.transpose() * pull);  // dE = p.theta
+  const Vec3 p = m.stiffness * c.cross(R.transpose() * pull);  // dE = p.theta
   Vec3 mu;
   if (!solve_positive_definite(M, p, mu)) mu = M.inverse() * p;
   mu *= 2.0;
   for (int j : nb) f[j] -= 0.5 * R * mu.cross(rest[j] - fit.G0);
-  if (m.normal_weight[k] <= 0.0) return;
+  const double weight = normal_weight(m, k);
+  if (weight <= 0.0) return;
   // The normal pair: dE = h'.dN, N the unnormalised neighbourhood normal.
   const Vec3 n = fit.N.normalized();
-  const Vec3 h = 0.5 * m.normal_weight[k] * R * mu.cross(fit.n0);
+  const Vec3 h = 0.5 * weight * R * mu.cross(fit.n0);
   const Vec3 hp = (h - n.dot(h) * n) / fit.N.norm();
   const int count = int(nb.size());
   if (m.surface) {  // N = sum of e_k x e_k+1 around the ring: the centroid terms cancel
@@ -256,6 +272,11 @@ ShapeMemory build_shape_memory(const std::string& component, const Mesh& mesh, i
   m.reaction = material.reaction;
   m.surface = !mesh.volumetric();
   const Adjacency local = m.surface ? ordered_one_rings(mesh) : edge_neighbours(mesh);
+  int rows = 0;  // exact sizes: arrays grown by doubling would keep up to twice their bytes
+  for (int i = 0; i < local.rows(); ++i) rows += local.row(i).empty() ? 0 : 1;
+  m.nodes.reserve(size_t(rows));
+  m.neighbours.offsets.reserve(size_t(rows) + 1);
+  m.neighbours.indices.reserve(local.indices.size());
   for (int i = 0; i < local.rows(); ++i) {
     if (local.row(i).empty()) continue;  // a node no cell uses carries no memory
     m.nodes.push_back(first_node + i);
@@ -270,6 +291,9 @@ void memorise_rest_shape(ShapeMemory& m, std::span<const Vec3> rest) {
   m.frame_pair.clear();
   m.normal_weight.clear();
   m.rest_offset.clear();
+  m.frame_pair.reserve(m.nodes.size());
+  m.normal_weight.reserve(m.nodes.size());
+  if (m.frame == FrameMode::frame) m.rest_offset.reserve(m.nodes.size());
   for (int k = 0; k < int(m.nodes.size()); ++k) {
     const auto nb = m.neighbours.row(k);
     const Vec3 G0 = centroid(nb, rest);
@@ -290,8 +314,16 @@ void memorise_rest_shape(ShapeMemory& m, std::span<const Vec3> rest) {
     // In polar mode the rest frame is the identity by construction (A0 is symmetric).
     const Eigen::Matrix3d R0 =
         m.frame == FrameMode::frame ? local_frame(m, k, rest, G0) : Eigen::Matrix3d::Identity();
-    m.rest_offset.push_back(R0.transpose() * (rest[m.nodes[k]] - G0));
+    if (m.frame == FrameMode::frame)  // polar mode: rest_offset() recomputes it
+      m.rest_offset.push_back(R0.transpose() * (rest[m.nodes[k]] - G0));
   }
+  // Only kept where read (ShapeMemory): none of the 16 bytes a node in a volume without flat
+  // neighbourhoods in polar mode.
+  if (std::all_of(m.normal_weight.begin(), m.normal_weight.end(),
+                  [](double w) { return w == 0.0; }))
+    std::vector<double>().swap(m.normal_weight);
+  if (m.surface || (m.frame == FrameMode::polar && m.normal_weight.empty()))
+    std::vector<std::array<int, 2>>().swap(m.frame_pair);
   m.plan = plan_blocks(int(m.nodes.size()), [&m](int k, const std::function<void(int)>& visit) {
     visit(m.nodes[k]);  // a node's pass writes it and its neighbours
     for (int j : m.neighbours.row(k)) visit(j);
@@ -306,7 +338,7 @@ Vec3 attraction_position(const ShapeMemory& m, int k, std::span<const Vec3> rest
   }
   const Fit fit = fit_neighbourhood(m, k, rest, x);
   extract_rotation(fit.A, q);
-  return fit.g + q.toRotationMatrix() * m.rest_offset[k];
+  return fit.g + q.toRotationMatrix() * rest_offset(m, k, rest);
 }
 
 namespace {
@@ -324,12 +356,13 @@ double add_polar_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::s
     const Fit fit = fit_neighbourhood(m, k, rest, x);
     extract_rotation(fit.A, rotations[k]);
     const Eigen::Matrix3d R = rotations[k].toRotationMatrix();
-    const Vec3 pull = fit.g + R * m.rest_offset[k] - x[i];
+    const Vec3 c = rest_offset(m, k, rest);
+    const Vec3 pull = fit.g + R * c - x[i];
     f[i] += m.stiffness * pull;
     if (m.reaction) {
       // -dE/dx through g and through R: the forces are then exactly the energy's gradient.
       add_centroid_reaction(m.neighbours.row(k), m.stiffness * pull, f);
-      add_rotation_reaction(m, k, rest, x, fit, R, pull, f);
+      add_rotation_reaction(m, k, rest, x, fit, R, c, pull, f);
     }
     return 0.5 * m.stiffness * pull.squaredNorm();
   });

@@ -65,15 +65,22 @@ int add_mesh(Model& model, const std::string& name, const Mesh& mesh,
   c.cell_count = int(mesh.cells.size());
   c.volumetric = mesh.volumetric();
   const std::vector<Triangle> boundary = boundary_triangles(mesh);
-  if (is_closed(boundary))
+  if (is_closed(boundary)) {
+    c.boundary.reserve(boundary.size());
     for (const Triangle& t : boundary)
       c.boundary.push_back({t[0] + first_node, t[1] + first_node, t[2] + first_node});
+  }
   for (const auto& [set, ids] : mesh.node_sets) {
     auto& global = c.node_sets[set];
     for (int i : ids) global.push_back(i + first_node);
   }
 
   const std::vector<double> masses = node_masses(name, mesh, material);
+  // Exact sizes: per-node arrays grown by doubling would keep up to twice their bytes.
+  model.rest_position.reserve(model.rest_position.size() + mesh.points.size());
+  model.mass.reserve(model.mass.size() + mesh.points.size());
+  model.cells.reserve(model.cells.size() + mesh.cells.size());
+  model.cell_component.reserve(model.cell_component.size() + mesh.cells.size());
   for (size_t i = 0; i < mesh.points.size(); ++i) {
     model.rest_position.push_back(mesh.points[i]);
     model.mass.push_back(masses[i]);
@@ -135,6 +142,7 @@ void add_volume_constraint(Model& model, int component) {
   for (const Triangle& t : v.triangles) v.nodes.insert(v.nodes.end(), t.begin(), t.end());
   std::sort(v.nodes.begin(), v.nodes.end());
   v.nodes.erase(std::unique(v.nodes.begin(), v.nodes.end()), v.nodes.end());
+  v.nodes.shrink_to_fit();  // three times the surface nodes before the dedup
   v.target_volume = enclosed_volume(model.rest_position, v.triangles);
   model.volumes.push_back(std::move(v));
 }

@@ -50,8 +50,9 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
   if (model_.settings.integrator == Integrator::newton_cotes)  // only it needs them
     a1_.assign(n, Vec3::Zero());
   f_start_.assign(n, Vec3::Zero());
-  scratch_.assign(n, Vec3::Zero());
-  touching_.assign(n, -1);
+  if (model_.settings.integrator == Integrator::newton_cotes)  // see accelerations()
+    scratch_.assign(n, Vec3::Zero());
+  if (!model_.obstacles.empty()) touching_.assign(n, -1);
   contact_impulse_.assign(model_.obstacles.size(), Vec3::Zero());
   pair_impulse_.assign(model_.contact_pairs.size(), Vec3::Zero());
   if (!model_.contact_pairs.empty()) {
@@ -60,14 +61,13 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
   }
   size_scale_ = bounding_diagonal(model_.rest_position);
   shortest_edge_ = runaway_edges(model_);
-  inertia_ = model_.mass;
   if (model_.settings.mode == SolveMode::static_equilibrium &&
       model_.settings.relaxation_mass_scaling)
     scale_masses_for_relaxation();
   const double stable = stable_time_step(model_);
   dt_ = model_.settings.dt ? *model_.settings.dt : model_.settings.dt_safety * stable;
   if (!std::isfinite(dt_)) dt_ = 1e-3;  // no stiffness at all: any step is stable
-  apply_position_constraints(model_, state_.x, 0.0, scratch_);
+  apply_position_constraints(model_, state_.x, 0.0, f_start_);  // free between steps
   compute_forces(model_, state_, 0.0);
 }
 
@@ -78,6 +78,7 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
 // step stays and the slow modes speed up (Underwood's dynamic relaxation). Gravity keeps
 // the true masses (Model::mass).
 void Simulator::scale_masses_for_relaxation() {
+  inertia_ = model_.mass;
   const std::vector<double> row = stiffness_row_sums(model_);
   double omega2 = 0.0;
   for (int i = 0; i < model_.node_count(); ++i) omega2 = std::max(omega2, row[i] / inertia_[i]);
@@ -125,7 +126,7 @@ void Simulator::checked_step(double time, double previous_load) {
 void Simulator::step_verlet(double h, double load_time) {
   State& s = state_;
   std::vector<Vec3>& a = f_start_;  // accelerations, tangent to the volume constraints
-  accelerations(a);
+  accelerations(a, x_start_);       // x_start_ is filled below
   kick_rigid_bodies(model_, s, h);
   const int n = model_.node_count();
 #pragma omp parallel for schedule(static) if (n >= kParallelFrom)
@@ -136,17 +137,17 @@ void Simulator::step_verlet(double h, double load_time) {
   }
   drift_rigid_bodies(model_, s, h, load_time);
   ContactStep contact = begin_contact_step(h);
-  apply_position_constraints(model_, s.x, load_time, scratch_, contact);
+  apply_position_constraints(model_, s.x, load_time, f_start_, contact);  // a is spent
 #pragma omp parallel for schedule(static) if (n >= kParallelFrom)
   for (int i = 0; i < n; ++i) s.v[i] = (s.x[i] - x_start_[i]) / h;
   compute_forces(model_, s, load_time);
   load_time_ = load_time;
   // The velocity projection below is linear: projecting the sum makes the kick tangent too.
-  accelerations(a, /*tangent=*/false);
+  accelerations(a, /*volume_scratch=*/{});
 #pragma omp parallel for schedule(static) if (n >= kParallelFrom)
   for (int i = 0; i < n; ++i) s.v[i] += 0.5 * h * a[i];
   apply_contact_velocities(model_, s.x, s.v, load_time, contact);
-  project_volume_velocities(model_, s.x, s.v, scratch_);
+  project_volume_velocities(model_, s.x, s.v, f_start_);  // a is spent
   project_doubled(model_, s.v);
   kick_rigid_bodies(model_, s, h);
   end_contact_step(h);
@@ -175,14 +176,14 @@ void Simulator::end_contact_step(double dt) {
 // Without their part along the volume gradients (the pressure the projection would undo
 // anyway), accelerations keep the drift on the constraint: the projection then corrects only
 // second-order terms, and relaxation converges instead of stalling on that round trip.
-void Simulator::accelerations(std::vector<Vec3>& a, bool tangent) {
+void Simulator::accelerations(std::vector<Vec3>& a, std::span<Vec3> volume_scratch) {
   const double c = model_.damping;
   const int n = model_.node_count();
 #pragma omp parallel for schedule(static) if (n >= kParallelFrom)
   for (int i = 0; i < n; ++i)
     a[i] = model_.inverse_mass[i].cwiseProduct(state_.f[i]) -
            c * state_.v[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
-  if (tangent) project_volume_velocities(model_, state_.x, a, scratch_);
+  if (!volume_scratch.empty()) project_volume_velocities(model_, state_.x, a, volume_scratch);
   project_doubled(model_, a);
 }
 
@@ -192,7 +193,7 @@ void Simulator::step_newton_cotes(double h, double load_time) {
   State& s = state_;
   const int n = model_.node_count();
   std::vector<Vec3>& a0 = f_start_;
-  accelerations(a0);
+  accelerations(a0, x_start_);  // x_start_ is filled below
   // Rigid bodies take the velocity Verlet splitting whatever the scheme: kick, drift here,
   // the second kick at the end with the forces at the new positions.
   kick_rigid_bodies(model_, s, h);
@@ -205,7 +206,7 @@ void Simulator::step_newton_cotes(double h, double load_time) {
   drift_rigid_bodies(model_, s, h, load_time);
   apply_prescribed(model_, s.x, load_time);
   compute_forces(model_, s, load_time);
-  accelerations(a1_);
+  accelerations(a1_, scratch_);  // every other node-sized buffer is in use here
   for (int i = 0; i < n; ++i) {
     s.v[i] = v_start_[i] + 0.5 * h * (a0[i] + a1_[i]);
     s.x[i] = x_start_[i] + 0.5 * h * (v_start_[i] + s.v[i]);
@@ -213,10 +214,10 @@ void Simulator::step_newton_cotes(double h, double load_time) {
   }
   place_rigid_nodes(model_, s);
   ContactStep contact = begin_contact_step(h);
-  apply_position_constraints(model_, s.x, load_time, scratch_, contact);
+  apply_position_constraints(model_, s.x, load_time, f_start_, contact);  // a0 is spent
   for (int i = 0; i < n; ++i) s.v[i] += (s.x[i] - a1_[i]) / h;
   apply_contact_velocities(model_, s.x, s.v, load_time, contact);
-  project_volume_velocities(model_, s.x, s.v, scratch_);
+  project_volume_velocities(model_, s.x, s.v, f_start_);
   project_doubled(model_, s.v);
   end_contact_step(h);
   compute_forces(model_, s, load_time);
@@ -264,17 +265,18 @@ void Simulator::check_stability() const {
 
 double Simulator::kinetic_energy() const {
   double e = 0.0;
-  for (int i = 0; i < model_.node_count(); ++i) e += 0.5 * inertia_[i] * state_.v[i].squaredNorm();
+  const std::vector<double>& inertia = this->inertia();
+  for (int i = 0; i < model_.node_count(); ++i) e += 0.5 * inertia[i] * state_.v[i].squaredNorm();
   return e;
 }
 
 double Simulator::max_residual_force() {
-  // f_start_ holds the residual and scratch_ the volume gradients: both free between steps.
+  // f_start_ holds the residual and x_start_ the volume gradients: both free between steps.
   std::vector<Vec3>& r = f_start_;
   for (int i = 0; i < model_.node_count(); ++i)
     r[i] = state_.f[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
   gather_doubled(model_, r);
-  remove_volume_pressures(r, scratch_, /*on_free_axes=*/true);
+  remove_volume_pressures(r, x_start_, /*on_free_axes=*/true);
   remove_contact_forces(r);
   if (deformable_) add_deformable_contact_forces(*deformable_, dt_, r);
   double largest = 0.0;
@@ -368,7 +370,7 @@ StaticResult Simulator::relax(double load_time, long max_iterations,
   static_progress_.fire_alpha = StaticProgress{}.fire_alpha;
   static_progress_.fire_downhill = 0;
   drift_rigid_bodies(model_, state_, 0.0, load_time);  // driven bodies at their new pose
-  apply_position_constraints(model_, state_.x, load_time, scratch_);
+  apply_position_constraints(model_, state_.x, load_time, f_start_);  // free between steps
   compute_forces(model_, state_, load_time);
   load_time_ = load_time;
   return continue_relax(load_time, max_iterations, progress, tolerance);
@@ -421,15 +423,16 @@ StaticResult Simulator::continue_relax(double load_time, long max_iterations,
 // Truth Cube compression it takes 303 iterations at 8^3 and 759 at 16^3 where kinetic
 // damping took 430 and 1,391.
 void Simulator::fire_update(StaticProgress& fire) {
-  std::vector<Vec3>& a = f_start_;  // free between steps
-  accelerations(a);
+  std::vector<Vec3>&a = f_start_, &volume_scratch = x_start_;  // free between steps
+  accelerations(a, volume_scratch);
   remove_contact_forces(a);  // what pushes into an obstacle is not downhill
   const int n = model_.node_count();
+  const std::vector<double>& inertia = this->inertia();
   double power = 0.0, vv = 0.0, aa = 0.0;
   for (int i = 0; i < n; ++i) {
-    power += inertia_[i] * a[i].dot(state_.v[i]);
-    vv += inertia_[i] * state_.v[i].squaredNorm();
-    aa += inertia_[i] * a[i].squaredNorm();
+    power += inertia[i] * a[i].dot(state_.v[i]);
+    vv += inertia[i] * state_.v[i].squaredNorm();
+    aa += inertia[i] * a[i].squaredNorm();
   }
   if (!(power > 0.0)) {
     for (Vec3& v : state_.v) v.setZero();
