@@ -9,6 +9,7 @@
 
 #include "phymul/mesh.hpp"
 #include "phymul/parallel_plan.hpp"
+#include "phymul/row_subset.hpp"
 #include "phymul/scene.hpp"
 #include "phymul/schedule.hpp"
 
@@ -27,12 +28,14 @@ struct ShapeMemory {
   // identity and the force pass recomputes c from the rest positions (24 bytes a node less).
   std::vector<Vec3> rest_offset;
   // Planar neighbourhoods (every surface node, flat interior ones) leave the best-fit
-  // rotation free about their normal: such nodes add the normal pair with this weight (m^2).
-  std::vector<double> normal_weight;  // zero for the others; empty when all are zero
-  // Two neighbours (positions within the row) spanning the node's frame: the most
-  // orthogonal pair at rest. Used by the `frame` mode and for flat interior normals: empty
-  // on surfaces, and in polar mode without normal pairs.
-  std::vector<std::array<int, 2>> frame_pair;
+  // rotation free about their normal: in polar mode such nodes add the normal pair with a
+  // weight (m^2). Two neighbours (positions within the row) span the node's frame: the most
+  // orthogonal pair at rest, used by the `frame` mode and for flat interior normals. Only
+  // the nodes that use them keep them (`framed`: the flat ones in polar mode, all of a
+  // volume in frame mode), in node order: a cube's corners, not 16 bytes on every node.
+  RowSubset framed;                            // memory nodes k with the two below
+  std::vector<double> normal_weight;           // per framed node; zero: no normal pair
+  std::vector<std::array<int, 2>> frame_pair;  // per framed node; empty on surfaces
   bool surface = false;  // neighbours are ordered rings (normal from the ring)
   ParallelPlan plan;     // memory nodes k in coloured blocks (solver/parallel_plan.hpp)
 };

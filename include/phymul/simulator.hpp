@@ -110,6 +110,7 @@ class Simulator {
   void end_contact_step(double dt);
   void scale_masses_for_relaxation();
   void fire_update(StaticProgress& fire);
+  static void release_free_memory();
 
   Model model_;
   State state_;

@@ -33,14 +33,20 @@ Vec3 pair_normal(std::span<const int> nb, const std::array<int, 2>& pair, std::s
   return (p[nb[pair[0]]] - g).cross(p[nb[pair[1]]] - g);
 }
 
-// Empty normal_weight: no node adds a normal pair (ShapeMemory).
+// Zero for the nodes without a normal pair (ShapeMemory::framed).
 double normal_weight(const ShapeMemory& m, int k) {
-  return m.normal_weight.empty() ? 0.0 : m.normal_weight[k];
+  const int f = m.framed.find(k);
+  return f < 0 ? 0.0 : m.normal_weight[size_t(f)];
+}
+
+// Memory node k of a volume, a framed one.
+const std::array<int, 2>& frame_pair(const ShapeMemory& m, int k) {
+  return m.frame_pair[size_t(m.framed.find(k))];
 }
 
 Vec3 neighbourhood_normal(const ShapeMemory& m, int k, std::span<const Vec3> p, const Vec3& g) {
   const auto nb = m.neighbours.row(k);
-  return m.surface ? ring_normal(nb, p, g) : pair_normal(nb, m.frame_pair[k], p, g);
+  return m.surface ? ring_normal(nb, p, g) : pair_normal(nb, frame_pair(m, k), p, g);
 }
 
 // The paper's frame: surface nodes from the normal and the first neighbour, interior
@@ -54,8 +60,9 @@ Eigen::Matrix3d local_frame(const ShapeMemory& m, int k, std::span<const Vec3> p
     e1 = (e1 - e1.dot(n) * n).normalized();
     R << e1, n.cross(e1), n;
   } else {
-    const Vec3 e1 = (p[nb[m.frame_pair[k][0]]] - g).normalized();
-    Vec3 u = p[nb[m.frame_pair[k][1]]] - g;
+    const std::array<int, 2>& pair = frame_pair(m, k);
+    const Vec3 e1 = (p[nb[pair[0]]] - g).normalized();
+    Vec3 u = p[nb[pair[1]]] - g;
     const Vec3 e2 = (u - u.dot(e1) * e1).normalized();
     R << e1, e2, e1.cross(e2);
   }
@@ -81,15 +88,6 @@ Eigen::Matrix3d covariance_about(std::span<const int> nb, std::span<const Vec3> 
   Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
   for (int j : nb) C += (p[j] - g) * (p[j] - g).transpose();
   return C;
-}
-
-// c = R0^T (X - G0), G0 the rest centroid of the neighbours. The frame mode stores it; in
-// polar mode R0 is the identity and c is recomputed, bit for bit as memorise_rest_shape
-// would, from rest positions the pass reads anyway: 24 bytes a node less.
-Vec3 rest_offset(const ShapeMemory& m, int k, std::span<const Vec3> rest) {
-  if (m.frame == FrameMode::frame) return m.rest_offset[k];
-  const Eigen::Matrix3d R0 = Eigen::Matrix3d::Identity();
-  return R0.transpose() * (rest[m.nodes[k]] - centroid(m.neighbours.row(k), rest));
 }
 
 }  // namespace
@@ -181,6 +179,8 @@ struct Fit {
   Eigen::Matrix3d A;       // sum (x_j - g)(X_j - G0)^T (+ the normal pair)
   Vec3 N = Vec3::Zero();   // unnormalised current normal of a flat neighbourhood
   Vec3 n0 = Vec3::Zero();  // unit rest normal of a flat neighbourhood
+  Vec3 c;                  // rest offset R0^T (X_i - G0), R0 = I (ShapeMemory::rest_offset)
+  double weight = 0.0;     // of the normal pair, m^2; zero: none
 };
 
 // The rest centroid and rest normal are recomputed rather than stored: 48 bytes a node less,
@@ -191,12 +191,16 @@ Fit fit_neighbourhood(const ShapeMemory& m, int k, std::span<const Vec3> rest,
   const int i = m.nodes[k];
   // One pass, about the node itself (small differences, no cancellation):
   // sum (x_j - g)(X_j - G0)^T = sum d_j r_j^T - (sum d_j) mean(r)^T.
-  Vec3 sum_d = Vec3::Zero(), sum_r = Vec3::Zero();
+  // The rest positions summed plainly too: the rest offset c is not stored in polar mode
+  // but recomputed, bit for bit as memorise_rest_shape computes it in frame mode (the
+  // centroid's sum in the same order, the identity's product), 24 bytes a node less.
+  Vec3 sum_d = Vec3::Zero(), sum_r = Vec3::Zero(), sum_X = Vec3::Zero();
   Eigen::Matrix3d P = Eigen::Matrix3d::Zero();
   for (int j : nb) {
     const Vec3 d = x[j] - x[i], r = rest[j] - rest[i];
     sum_d += d;
     sum_r += r;
+    sum_X += rest[j];
     P.noalias() += d * r.transpose();
   }
   const double count = double(nb.size());
@@ -204,10 +208,13 @@ Fit fit_neighbourhood(const ShapeMemory& m, int k, std::span<const Vec3> rest,
   fit.g = x[i] + sum_d / count;
   fit.G0 = rest[i] + sum_r / count;
   fit.A = P - sum_d * (sum_r / count).transpose();
-  if (const double weight = normal_weight(m, k); weight > 0.0) {
+  const Eigen::Matrix3d R0 = Eigen::Matrix3d::Identity();
+  fit.c = R0.transpose() * (rest[i] - sum_X / count);
+  fit.weight = normal_weight(m, k);
+  if (fit.weight > 0.0) {
     fit.N = neighbourhood_normal(m, k, x, fit.g);
     fit.n0 = neighbourhood_normal(m, k, rest, fit.G0).normalized();
-    fit.A += weight * fit.N.normalized() * fit.n0.transpose();
+    fit.A += fit.weight * fit.N.normalized() * fit.n0.transpose();
   }
   return fit;
 }
@@ -218,15 +225,15 @@ Fit fit_neighbourhood(const ShapeMemory& m, int k, std::span<const Vec3> rest,
 // neighbour that enters A (and to the normal pair of flat neighbourhoods).
 void add_rotation_reaction(const ShapeMemory& m, int k, std::span<const Vec3> rest,
                            std::span<const Vec3> x, const Fit& fit, const Eigen::Matrix3d& R,
-                           const Vec3& c, const Vec3& pull, std::span<Vec3> f) {
+                           const Vec3& pull, std::span<Vec3> f) {
   const auto nb = m.neighbours.row(k);
   const Eigen::Matrix3d M = rotation_hessian(R.transpose() * fit.A);
-  const Vec3 p = m.stiffness * c.cross(R.transpose() * pull);  // dE = p.theta
+  const Vec3 p = m.stiffness * fit.c.cross(R.transpose() * pull);  // dE = p.theta
   Vec3 mu;
   if (!solve_positive_definite(M, p, mu)) mu = M.inverse() * p;
   mu *= 2.0;
   for (int j : nb) f[j] -= 0.5 * R * mu.cross(rest[j] - fit.G0);
-  const double weight = normal_weight(m, k);
+  const double weight = fit.weight;
   if (weight <= 0.0) return;
   // The normal pair: dE = h'.dN, N the unnormalised neighbourhood normal.
   const Vec3 n = fit.N.normalized();
@@ -241,7 +248,7 @@ void add_rotation_reaction(const ShapeMemory& m, int k, std::span<const Vec3> re
     }
     return;
   }
-  const int a = nb[m.frame_pair[k][0]], b = nb[m.frame_pair[k][1]];
+  const int a = nb[frame_pair(m, k)[0]], b = nb[frame_pair(m, k)[1]];
   const Vec3 ga = (x[b] - fit.g).cross(hp), gb = hp.cross(x[a] - fit.g);
   f[a] -= ga;
   f[b] -= gb;
@@ -288,13 +295,13 @@ ShapeMemory build_shape_memory(const std::string& component, const Mesh& mesh, i
 }
 
 void memorise_rest_shape(ShapeMemory& m, std::span<const Vec3> rest) {
-  m.frame_pair.clear();
+  const int count = int(m.nodes.size());
+  // Normal weights and frame pairs are kept for the nodes that read them only
+  // (ShapeMemory::framed).
+  std::vector<char> framed(m.nodes.size(), 0);
   m.normal_weight.clear();
-  m.rest_offset.clear();
-  m.frame_pair.reserve(m.nodes.size());
-  m.normal_weight.reserve(m.nodes.size());
-  if (m.frame == FrameMode::frame) m.rest_offset.reserve(m.nodes.size());
-  for (int k = 0; k < int(m.nodes.size()); ++k) {
+  m.frame_pair.clear();
+  for (int k = 0; k < count; ++k) {
     const auto nb = m.neighbours.row(k);
     const Vec3 G0 = centroid(nb, rest);
     const auto [pair, sine] = nb.size() >= 2 ? best_pair(nb, rest, G0)
@@ -304,26 +311,29 @@ void memorise_rest_shape(ShapeMemory& m, std::span<const Vec3> rest) {
           "component '{}': node {} has {} neighbour(s), all on one line; local shape memory "
           "needs at least three neighbours not on a line",
           m.component, m.nodes[k], nb.size()));
-    m.frame_pair.push_back(pair);
-
     const Eigen::Matrix3d C = covariance_about(nb, rest, G0);
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
     const bool flat = eig.eigenvalues()(0) < 1e-2 * eig.eigenvalues()(2);
-    m.normal_weight.push_back(m.surface || flat ? C.trace() / double(nb.size()) : 0.0);
-
-    // In polar mode the rest frame is the identity by construction (A0 is symmetric).
-    const Eigen::Matrix3d R0 =
-        m.frame == FrameMode::frame ? local_frame(m, k, rest, G0) : Eigen::Matrix3d::Identity();
-    if (m.frame == FrameMode::frame)  // polar mode: rest_offset() recomputes it
-      m.rest_offset.push_back(R0.transpose() * (rest[m.nodes[k]] - G0));
+    const double weight = m.surface || flat ? C.trace() / double(nb.size()) : 0.0;
+    framed[size_t(k)] = m.frame == FrameMode::frame ? !m.surface : weight > 0.0;
+    if (!framed[size_t(k)]) continue;
+    m.normal_weight.push_back(weight);
+    if (!m.surface) m.frame_pair.push_back(pair);
   }
-  // Only kept where read (ShapeMemory): none of the 16 bytes a node in a volume without flat
-  // neighbourhoods in polar mode.
-  if (std::all_of(m.normal_weight.begin(), m.normal_weight.end(),
-                  [](double w) { return w == 0.0; }))
-    std::vector<double>().swap(m.normal_weight);
-  if (m.surface || (m.frame == FrameMode::polar && m.normal_weight.empty()))
-    std::vector<std::array<int, 2>>().swap(m.frame_pair);
+  m.normal_weight.shrink_to_fit();
+  m.frame_pair.shrink_to_fit();
+  m.framed = make_row_subset(framed);
+  // In polar mode the rest frame is the identity by construction (A0 is symmetric), and
+  // fit_neighbourhood recomputes c.
+  m.rest_offset.clear();
+  if (m.frame == FrameMode::frame) {
+    m.rest_offset.reserve(m.nodes.size());
+    for (int k = 0; k < count; ++k) {
+      const Vec3 G0 = centroid(m.neighbours.row(k), rest);
+      const Eigen::Matrix3d R0 = local_frame(m, k, rest, G0);
+      m.rest_offset.push_back(R0.transpose() * (rest[m.nodes[k]] - G0));
+    }
+  }
   m.plan = plan_blocks(int(m.nodes.size()), [&m](int k, const std::function<void(int)>& visit) {
     visit(m.nodes[k]);  // a node's pass writes it and its neighbours
     for (int j : m.neighbours.row(k)) visit(j);
@@ -338,7 +348,7 @@ Vec3 attraction_position(const ShapeMemory& m, int k, std::span<const Vec3> rest
   }
   const Fit fit = fit_neighbourhood(m, k, rest, x);
   extract_rotation(fit.A, q);
-  return fit.g + q.toRotationMatrix() * rest_offset(m, k, rest);
+  return fit.g + q.toRotationMatrix() * fit.c;
 }
 
 namespace {
@@ -356,13 +366,12 @@ double add_polar_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::s
     const Fit fit = fit_neighbourhood(m, k, rest, x);
     extract_rotation(fit.A, rotations[k]);
     const Eigen::Matrix3d R = rotations[k].toRotationMatrix();
-    const Vec3 c = rest_offset(m, k, rest);
-    const Vec3 pull = fit.g + R * c - x[i];
+    const Vec3 pull = fit.g + R * fit.c - x[i];
     f[i] += m.stiffness * pull;
     if (m.reaction) {
       // -dE/dx through g and through R: the forces are then exactly the energy's gradient.
       add_centroid_reaction(m.neighbours.row(k), m.stiffness * pull, f);
-      add_rotation_reaction(m, k, rest, x, fit, R, c, pull, f);
+      add_rotation_reaction(m, k, rest, x, fit, R, pull, f);
     }
     return 0.5 * m.stiffness * pull.squaredNorm();
   });

@@ -1,6 +1,9 @@
 #include "phymul/simulator.hpp"
 
 #include <fmt/format.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include <algorithm>
 #include <cmath>
@@ -69,6 +72,16 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
   if (!std::isfinite(dt_)) dt_ = 1e-3;  // no stiffness at all: any step is stable
   apply_position_constraints(model_, state_.x, 0.0, f_start_);  // free between steps
   compute_forces(model_, state_, 0.0);
+  release_free_memory();
+}
+
+// Building a model (meshes, adjacency, sorting) frees about half as much as the model and
+// the simulator keep, and the allocator keeps those holes resident for the whole run: a
+// fifth of the memory of a large model. Giving their pages back costs a few microseconds.
+void Simulator::release_free_memory() {
+#if defined(__GLIBC__)
+  malloc_trim(0);
+#endif
 }
 
 // Static equilibrium does not depend on the masses; the time to reach it by pseudo-dynamics
