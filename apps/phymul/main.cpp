@@ -12,6 +12,7 @@
 #include "phymul/run.hpp"
 #include "phymul/scene.hpp"
 #include "phymul/simulator.hpp"
+#include "prostate_command.hpp"
 #include "truthcube_command.hpp"
 
 namespace {
@@ -132,6 +133,7 @@ int main(int argc, char** argv) {
   app.add_subcommand("schema", "print the scene file reference (Markdown)");
   const auto truthcube = phymul::cli::add_truthcube_command(app);
   const auto calibrate = phymul::cli::add_calibrate_command(app);
+  const auto prostate = phymul::cli::add_prostate_command(app);
 
   // CLI11 alone reports an unknown command as "A subcommand is required": name it instead.
   if (argc > 1 && argv[1][0] != '-') {
@@ -160,6 +162,7 @@ int main(int argc, char** argv) {
     if (*check_cmd) return check(scene_file);
     if (*truthcube.app) return truthcube.run();
     if (*calibrate.app) return calibrate.run();
+    if (*prostate.app) return prostate.run();
     std::cout << phymul::scene_reference_markdown();
     return 0;
   } catch (const std::exception& e) {

@@ -52,6 +52,11 @@ class MeshError : public std::runtime_error {
 // Signed volume (m^3) of a volumetric cell, area (m^2, positive) of a surface cell.
 double cell_measure(const std::vector<Vec3>& points, const Cell& cell);
 
+// The three tetrahedra of a wedge, cut so that neighbouring wedges split their shared
+// quadrilateral the same way (each quad along the diagonal through its smallest node id).
+// Their orientation is not fixed: order them by their signed volume where it matters.
+std::array<Cell, 3> wedge_tetrahedra(const Cell& wedge);
+
 // Throws MeshError for: empty mesh, node index out of range, repeated node in a cell,
 // volumetric and surface cells mixed, inverted cells (negative volume, for hexa and wedge
 // also any negative corner tetra / Jacobian at a corner), degenerate cells (|measure| below
@@ -112,6 +117,10 @@ Mesh make_ellipsoid_surface(const Vec3& radii, int subdivisions, const Vec3& cen
 // above. Node sets: "surface" (all outer nodes), "top", "bottom".
 Mesh make_ellipsoid_volume(const Vec3& radii, int subdivisions, int layers,
                            const Vec3& center = Vec3::Zero());
+
+// Volume mesh of an ellipsoid in hexahedra: a grid of cells^3 (cells even, >= 2) mapped from
+// a cube, cells of nearly one size. Node sets: "surface", "top", "bottom" (the poles).
+Mesh make_ellipsoid_hexa(const Vec3& radii, int cells, const Vec3& center = Vec3::Zero());
 
 // Cylinder along z of the given radius and length. around >= 3 nodes per ring, along >= 1
 // cell layers. Surface: closed (caps triangulated with a centre node). Volume: wedges

@@ -39,6 +39,9 @@ struct RunReport {
   double simulated_time = 0.0;   // s
   double wall_time = 0.0;        // s
   double ns_per_node_per_step = 0.0;
+  // Dynamic mode: simulated seconds per wall-clock second, output included (steps per second
+  // x dt); real time when >= 1.
+  double real_time_factor = 0.0;
   double dt = 0.0, stable_dt = 0.0;  // s
   int nodes = 0;
   int threads = 1;  // OpenMP threads the run used

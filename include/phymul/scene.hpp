@@ -67,11 +67,12 @@ struct MeshSpec {
   Eigen::Vector3d radii = Eigen::Vector3d::Constant(0.01);  // ellipsoid, m
   int subdivisions = 2;                                     // ellipsoid
   int layers = 3;                                           // ellipsoid volume
-  double radius = 0.01, length = 0.02;                      // cylinder, m
-  int around = 16, along = 4, rings = 2;                    // cylinder
-  Eigen::Vector3d center = Eigen::Vector3d::Zero();         // m
-  std::string file;                                         // instead of a generator
-  std::string units = "m";                                  // of the file's coordinates
+  int hexahedra = 0;  // ellipsoid volume: cells per axis of a mapped grid; 0: the shells
+  double radius = 0.01, length = 0.02;               // cylinder, m
+  int around = 16, along = 4, rings = 2;             // cylinder
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();  // m
+  std::string file;                                  // instead of a generator
+  std::string units = "m";                           // of the file's coordinates
   SourceLoc loc;
 };
 

@@ -16,6 +16,13 @@ using Mat3 = Eigen::Matrix3d;
 template <int N>
 using Gradient = Eigen::Matrix<double, N, 3>;
 
+double cell_measure_at(std::span<const Vec3> rest, int first_node, const Cell& t) {
+  const Vec3& a = rest[first_node + t.nodes[0]];
+  return (rest[first_node + t.nodes[1]] - a)
+      .cross(rest[first_node + t.nodes[2]] - a)
+      .dot(rest[first_node + t.nodes[3]] - a);
+}
+
 void fail_cell(const std::string& component, int cell, double det) {
   throw std::invalid_argument(fmt::format(
       "object '{}': cell {} is inverted or degenerate for finite elements (Jacobian {:.3g})",
@@ -115,23 +122,26 @@ ExplicitFem build_explicit_fem(const std::string& component, const Mesh& mesh, i
   fem.component = component;
   fem.mu = material.young / (2.0 * (1.0 + material.poisson));
   fem.kappa = material.young / (3.0 * (1.0 - 2.0 * material.poisson));
-  const CellType type = mesh.cells.empty() ? CellType::hexa : mesh.cells[0].type;
-  if (type != CellType::hexa && type != CellType::tetra)
-    throw std::invalid_argument(
-        fmt::format("object '{}': finite elements take hexahedra or tetrahedra (this mesh has {})",
-                    component, cell_type_name(type)));
-  fem.nodes_per_cell = type == CellType::hexa ? 8 : 4;
+  const bool hexa = !mesh.cells.empty() && mesh.cells[0].type == CellType::hexa;
+  fem.nodes_per_cell = hexa ? 8 : 4;
   for (int e = 0; e < int(mesh.cells.size()); ++e) {
     const Cell& c = mesh.cells[e];
-    if (c.type != type)
+    if (hexa != (c.type == CellType::hexa) || !is_volumetric(c.type) || c.type == CellType::quad) {
       throw std::invalid_argument(fmt::format(
-          "object '{}': finite elements need one cell type (cell {} is {}, cell 0 is {})",
-          component, e, cell_type_name(c.type), cell_type_name(type)));
-    if (type == CellType::hexa) {
+          "object '{}': finite elements take hexahedra alone, or tetrahedra and wedges (cell {} "
+          "is {}, cell 0 is {})",
+          component, e, cell_type_name(c.type), cell_type_name(mesh.cells[0].type)));
+    }
+    if (c.type == CellType::hexa) {
       add_hexa(fem, component, e, c, first_node, rest);
       fem.hourglass_stiffness.back() *= material.hourglass;
-    } else {
+    } else if (c.type == CellType::tetra) {
       add_tetra(fem, component, e, c, first_node, rest);
+    } else {
+      for (Cell t : wedge_tetrahedra(c)) {
+        if (cell_measure_at(rest, first_node, t) < 0.0) std::swap(t.nodes[1], t.nodes[2]);
+        add_tetra(fem, component, e, t, first_node, rest);
+      }
     }
   }
   plan_explicit_fem(fem);

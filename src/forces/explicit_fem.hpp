@@ -8,7 +8,8 @@
 
 namespace phymul {
 
-// Reference data of every cell of `mesh` (hexahedra or tetrahedra), whose node k is global
+// Reference data of every cell of `mesh` (hexahedra, or tetrahedra and wedges cut into
+// tetrahedra by wedge_tetrahedra), whose node k is global
 // node first_node + k. Throws std::invalid_argument on other cells or bad moduli.
 ExplicitFem build_explicit_fem(const std::string& component, const Mesh& mesh, int first_node,
                                const MaterialSpec& material, std::span<const Vec3> rest);

@@ -354,6 +354,15 @@ std::vector<Parameter> mesh_parameters() {
        .when = {kEllipsoid, kVolume},
        .doc = "Ellipsoid volume: concentric shells from the centre to the surface."},
       {.section = "mesh",
+       .name = "hexahedra",
+       .kind = Kind::integer,
+       .range = closed(0, 100),
+       .default_value = "0",
+       .when = {kEllipsoid, kVolume},
+       .doc = "Ellipsoid volume: instead of shells, a grid of this many hexahedra per axis "
+              "(even) mapped from a cube onto the ellipsoid; cells of nearly one size, so a "
+              "larger stable time step. 0: the shells."},
+      {.section = "mesh",
        .name = "radius",
        .kind = Kind::quantity,
        .dimension = Dimension::length,

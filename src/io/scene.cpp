@@ -367,6 +367,7 @@ MeshSpec SceneBuilder::mesh(SectionReader& reader) {
   reader.read("radii", spec.radii);
   reader.read("subdivisions", spec.subdivisions);
   reader.read("layers", spec.layers);
+  reader.read("hexahedra", spec.hexahedra);
   reader.read("radius", spec.radius);
   reader.read("length", spec.length);
   reader.read("around", spec.around);

@@ -395,6 +395,40 @@ Mesh make_ellipsoid_volume(const Vec3& radii, int subdivisions, int layers, cons
   return mesh;
 }
 
+// A box grid of [-1, 1]^3 mapped onto the unit ball (the cube's faces onto the sphere, the
+// interior smoothly; Nowell's mapping), then scaled: hexahedra of about the same size
+// everywhere, unlike the shells, whose inner cells shrink and limit the stable time step.
+Mesh make_ellipsoid_hexa(const Vec3& radii, int cells, const Vec3& center) {
+  const char* generator = "make_ellipsoid_hexa";
+  check_radii(generator, radii);
+  check_at_least(generator, "hexahedra", cells, 2);
+  if (cells % 2 != 0)
+    reject(generator, "hexahedra must be even, so that the poles are nodes (got " +
+                          std::to_string(cells) + ")");
+  check_center(generator, center);
+  Mesh mesh = make_box(Vec3::Constant(2.0), {cells, cells, cells}, CellType::hexa, Vec3::Zero());
+  std::vector<int> surface;
+  for (const char* face : {"left", "right", "front", "back", "bottom", "top"}) {
+    const std::vector<int>& f = mesh.node_sets.at(face);
+    surface.insert(surface.end(), f.begin(), f.end());
+  }
+  std::sort(surface.begin(), surface.end());
+  surface.erase(std::unique(surface.begin(), surface.end()), surface.end());
+  for (Vec3& p : mesh.points) {
+    const Vec3 q = p.cwiseProduct(p);
+    const Vec3 ball(p.x() * std::sqrt(1.0 - q.y() / 2 - q.z() / 2 + q.y() * q.z() / 3),
+                    p.y() * std::sqrt(1.0 - q.z() / 2 - q.x() / 2 + q.z() * q.x() / 3),
+                    p.z() * std::sqrt(1.0 - q.x() / 2 - q.y() / 2 + q.x() * q.y() / 3));
+    p = center + radii.cwiseProduct(ball);
+  }
+  const int half = cells / 2, row = cells + 1;
+  mesh.node_sets.clear();
+  mesh.node_sets["surface"] = std::move(surface);
+  mesh.node_sets["top"] = {(cells * row + half) * row + half};
+  mesh.node_sets["bottom"] = {half * row + half};
+  return mesh;
+}
+
 // Rings j = 0..along of `around` nodes (ring j at z = -length/2 + j * length/along), then
 // the bottom and the top cap centres.
 Mesh make_cylinder_surface(double radius, double length, int around, int along,

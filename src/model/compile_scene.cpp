@@ -27,8 +27,9 @@ struct Compiler {
   Mesh generate(const MeshSpec& m) {
     if (m.generator == "box") return make_box(m.size, m.cells, m.element, m.center);
     if (m.generator == "ellipsoid")
-      return m.surface ? make_ellipsoid_surface(m.radii, m.subdivisions, m.center)
-                       : make_ellipsoid_volume(m.radii, m.subdivisions, m.layers, m.center);
+      return m.surface         ? make_ellipsoid_surface(m.radii, m.subdivisions, m.center)
+             : m.hexahedra > 0 ? make_ellipsoid_hexa(m.radii, m.hexahedra, m.center)
+                               : make_ellipsoid_volume(m.radii, m.subdivisions, m.layers, m.center);
     if (m.generator == "cylinder")
       return m.surface
                  ? make_cylinder_surface(m.radius, m.length, m.around, m.along, m.center)

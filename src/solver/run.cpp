@@ -329,6 +329,9 @@ RunReport run_scene(const Scene& scene, const RunOptions& options) {
   if (steps_here > 0)
     report.ns_per_node_per_step =
         report.wall_time * 1e9 / (double(steps_here) * double(report.nodes));
+  if (!static_mode && report.wall_time > 0.0)
+    report.real_time_factor =
+        (sim.state().time - (from ? from->state.time : 0.0)) / report.wall_time;
   if (report.status != "interrupted")
     std::filesystem::remove(checkpoint_path(options.output_dir), ec);
   out.finish(report);

@@ -55,7 +55,10 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
   f_start_.assign(n, Vec3::Zero());
   if (model_.settings.integrator == Integrator::newton_cotes)  // see accelerations()
     scratch_.assign(n, Vec3::Zero());
-  if (!model_.obstacles.empty()) touching_.assign(n, -1);
+  if (!model_.obstacles.empty()) {
+    touching_.assign(n, -1);
+    contact_normals_.reserve(size_t(n) * model_.obstacles.size());
+  }
   contact_impulse_.assign(model_.obstacles.size(), Vec3::Zero());
   pair_impulse_.assign(model_.contact_pairs.size(), Vec3::Zero());
   if (!model_.contact_pairs.empty()) {
@@ -287,13 +290,16 @@ double Simulator::kinetic_energy() const {
   return e;
 }
 
+constexpr double kTouching = 1e-12;  // m, as obstacle_force counts contact
+
 double Simulator::max_residual_force() {
   // f_start_ holds the residual and x_start_ the volume gradients: both free between steps.
   std::vector<Vec3>& r = f_start_;
   for (int i = 0; i < model_.node_count(); ++i)
     r[i] = state_.f[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
   gather_doubled(model_, r);
-  remove_volume_pressures(r, x_start_, /*on_free_axes=*/true);
+  find_contact_normals();
+  remove_volume_pressures(r, x_start_, /*on_free_axes=*/true, contact_normals_);
   remove_contact_forces(r);
   if (deformable_) add_deformable_contact_forces(*deformable_, dt_, r);
   double largest = 0.0;
@@ -307,7 +313,8 @@ double Simulator::max_residual_force() {
 // part). Surfaces sharing nodes: Gauss-Seidel sweeps until what is left to take out is far
 // below the tolerance (one pass is exact for disjoint ones).
 void Simulator::remove_volume_pressures(std::vector<Vec3>& r, std::vector<Vec3>& grad,
-                                        bool on_free_axes) const {
+                                        bool on_free_axes,
+                                        std::span<const std::pair<int, Vec3>> contact) const {
   const int sweeps = model_.coupled_volumes ? 200 : 1;
   for (int sweep = 0; sweep < sweeps; ++sweep) {
     double largest_change = 0.0;
@@ -321,6 +328,13 @@ void Simulator::remove_volume_pressures(std::vector<Vec3>& r, std::vector<Vec3>&
         gg += free_grad.squaredNorm();
         longest = std::max(longest, grad[i].norm());
       }
+      // Against an obstacle a node's push along the contact normal is the contact's to
+      // balance, whatever its size: only its tangential part tells the pressure.
+      for (const auto& [i, n] : contact) {
+        const Vec3 free_grad = grad[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
+        rg -= r[i].dot(n) * free_grad.dot(n);
+        gg -= free_grad.dot(n) * free_grad.dot(n);
+      }
       if (gg == 0.0) continue;
       const double pressure = rg / gg;
       for (int i : c.nodes) r[i] -= pressure * grad[i];
@@ -330,10 +344,24 @@ void Simulator::remove_volume_pressures(std::vector<Vec3>& r, std::vector<Vec3>&
   }
 }
 
+void Simulator::find_contact_normals() {
+  contact_normals_.clear();
+  for (const RigidObstacle& o : model_.obstacles) {
+    auto add = [&](int i) {
+      const SurfaceDistance d = obstacle_distance(o, state_.x[i], load_time_);
+      const bool moved = touching_[size_t(i)] == int(&o - model_.obstacles.data());
+      if (std::abs(d.distance) <= kTouching || moved) contact_normals_.push_back({i, d.normal});
+    };
+    if (o.nodes.empty())
+      for (int i = 0; i < model_.node_count(); ++i) add(i);
+    else
+      for (int i : o.nodes) add(i);
+  }
+}
+
 // A node touching an obstacle can be pushed into it with any force: that part of its
 // residual is the contact's reaction, not an imbalance.
 void Simulator::remove_contact_forces(std::vector<Vec3>& r) const {
-  constexpr double kTouching = 1e-12;  // m, as obstacle_force counts contact
   // Touching: on the surface, or put on it by the last step's contact stage (the volume
   // projection after it may have moved the node off by a hair).
   auto remove = [&](const RigidObstacle& o, int i) {

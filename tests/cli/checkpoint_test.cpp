@@ -91,6 +91,7 @@ std::string report_numbers(const fs::path& dir) {
   while (std::getline(in, line))
     if (line.find("wall_time_s") == std::string::npos &&
         line.find("ns_per_node_per_step") == std::string::npos &&
+        line.find("real_time_factor") == std::string::npos &&  // wall-clock, like the two above
         line.find("\"message\"") == std::string::npos)
       kept += line + '\n';
   return kept;

@@ -1,0 +1,157 @@
+#include "prostate_command.hpp"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <iostream>
+#include <memory>
+
+#include "phymul/prostate.hpp"
+#include "phymul/run.hpp"
+#include "phymul/vtk.hpp"
+
+namespace phymul::cli {
+namespace {
+
+struct Settings {
+  prostate::Options study;
+  std::vector<double> fillings_ml{50, 100, 200, 300, 400};
+  std::string probe = "both", model = "lsm";
+  double force = 0, lift_mm = 0, young_kpa = 0;
+  std::string output = "results/prostate", json_file, scenes;
+  bool no_realtime = false, no_pictures = false, quiet = false;
+};
+
+void make_pictures(const Settings& s) {
+  const std::string script = PHYMUL_SOURCE_DIR "/scripts/prostate_pictures.sh";
+  const int rc = std::system(
+      fmt::format("'{}' '{}' {}", script, s.output, s.quiet ? ">/dev/null 2>&1" : "").c_str());
+  if (rc != 0)
+    std::cerr << fmt::format(
+        "warning: the pictures were not made ({} failed; run `make demo` once to install "
+        "python3-matplotlib, python3-vtk9 and xvfb)\n",
+        script);
+}
+
+// The empty bladder's pressure-probe scene in explicit dynamics, timed against the clock.
+RunReport real_time_check(const Settings& s) {
+  prostate::SceneSettings scene =
+      prostate::study_scene(s.study, s.study.fillings.front(), prostate::Probe::pressure);
+  scene.dynamic = true;
+  scene.duration = 1.0;
+  const std::filesystem::path dir = std::filesystem::path(s.output) / "real_time";
+  std::filesystem::create_directories(dir);
+  const std::string text = prostate::scene_text(s.study, scene);
+  write_file_atomically(dir / "scene.yaml", [&](std::ostream& o) { o << text; });
+  RunOptions options;
+  options.output_dir = dir;
+  options.progress = !s.quiet && isatty(fileno(stderr));
+  return run_scene(load_scene(dir / "scene.yaml"), options);
+}
+
+int run(Settings& s) {
+  prostate::Options& o = s.study;
+  o.fillings.clear();
+  for (double ml : s.fillings_ml) o.fillings.push_back(ml * 1e-6);
+  if (s.probe == "pressure") o.probes = {prostate::Probe::pressure};
+  if (s.probe == "rigid") o.probes = {prostate::Probe::rigid};
+  if (s.model == "fem") o.prostate_model = ElasticModel::fem;
+  if (s.force > 0) o.probe_force = s.force;
+  if (s.lift_mm > 0) o.probe_lift = s.lift_mm * 1e-3;
+  if (s.young_kpa > 0) o.prostate_young = s.young_kpa * 1e3;
+  try {
+    if (!s.scenes.empty()) {  // the study's scenes, in dynamics, for `phymul run`
+      std::filesystem::create_directories(s.scenes);
+      for (double filling : o.fillings)
+        for (prostate::Probe p : o.probes) {
+          prostate::SceneSettings scene = prostate::study_scene(o, filling, p);
+          scene.dynamic = true;
+          const auto file =
+              std::filesystem::path(s.scenes) / (prostate::run_name(filling, p) + ".yaml");
+          write_file_atomically(file,
+                                [&](std::ostream& f) { f << prostate::scene_text(o, scene); });
+        }
+      return 0;
+    }
+    const prostate::Study study = prostate::run_study(o, s.output);
+    std::string json = prostate::json(study);
+    std::cout << prostate::table(study);
+    if (!s.no_realtime) {
+      const RunReport r = real_time_check(s);
+      std::cout << fmt::format(
+          "real time: the {:.0f} mL pressure scene in dynamics, 1 thread: {} steps of {:.3g} s in "
+          "{:.3g} s, {:.2f}x real time ({}/real_time/report.json)\n",
+          o.fillings.front() * 1e6, r.steps, r.dt, r.wall_time, r.real_time_factor, s.output);
+      json.insert(json.rfind('}'),
+                  fmt::format(",\n  \"real_time_factor\": {:.6g}\n", r.real_time_factor));
+    }
+    write_file_atomically(std::filesystem::path(s.output) / "prostate.json",
+                          [&](std::ostream& f) { f << json; });
+    if (!s.json_file.empty())
+      write_file_atomically(s.json_file, [&](std::ostream& f) { f << json; });
+    if (!s.no_pictures) make_pictures(s);
+    if (!s.quiet) std::cout << fmt::format("results in {}/\n", s.output);
+    return 0;
+  } catch (const SceneError& e) {
+    for (const auto& d : e.diagnostics()) std::cerr << "error: " << d.str() << '\n';
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << '\n';
+    return 1;
+  }
+}
+
+}  // namespace
+
+ProstateCommand add_prostate_command(CLI::App& parent) {
+  auto settings = std::make_shared<Settings>();
+  Settings& s = *settings;
+  prostate::Options& o = s.study;
+  CLI::App* app = parent.add_subcommand(
+      "prostate",
+      "the prostate study: an endorectal probe pushes the prostate, bladder empty to full");
+  app->add_option("--fillings", s.fillings_ml, "bladder fillings (mL)")
+      ->delimiter(',')
+      ->check(CLI::Range(5.0, 1000.0))
+      ->capture_default_str();
+  app->add_option("--probe", s.probe, "the paper's cylinder pressure, a rigid probe, or both")
+      ->check(CLI::IsMember({"pressure", "rigid", "both"}))
+      ->capture_default_str();
+  app->add_option("--force", s.force, fmt::format("pressure probe force (N) [{}]", o.probe_force))
+      ->check(CLI::Range(1e-3, 100.0));
+  app->add_option("--lift", s.lift_mm,
+                  fmt::format("rigid probe rise after contact (mm) [{}]", o.probe_lift * 1e3))
+      ->check(CLI::Range(0.01, 20.0));
+  app->add_option("--prostate-model", s.model, "shape memory (the paper) or finite elements")
+      ->check(CLI::IsMember({"lsm", "fem"}))
+      ->capture_default_str();
+  app->add_option("--stiffness", o.prostate_stiffness, "prostate shape-memory stiffness K (N/m)")
+      ->check(CLI::Range(1e-3, 1e6))
+      ->capture_default_str();
+  app->add_option("--young", s.young_kpa,
+                  fmt::format("prostate Young's modulus, fem (kPa) [{}]", o.prostate_young * 1e-3))
+      ->check(CLI::Range(0.1, 1e4));
+  app->add_option("--poisson", o.prostate_poisson, "prostate Poisson ratio, fem")
+      ->check(CLI::Range(0.0, 0.4999))
+      ->capture_default_str();
+  app->add_option("--bladder-stiffness", o.bladder_stiffness, "bladder wall shape-memory K (N/m)")
+      ->check(CLI::Range(1e-3, 1e6))
+      ->capture_default_str();
+  app->add_option("--hexahedra", o.prostate_hexahedra, "prostate hexahedra per axis (even)")
+      ->check(CLI::Range(2, 40))
+      ->capture_default_str();
+  app->add_option("--tolerance", o.tolerance, "equilibrium: largest residual nodal force (N)")
+      ->check(CLI::Range(1e-12, 1e-2))
+      ->capture_default_str();
+  app->add_option("-o,--output", s.output, "output directory")->capture_default_str();
+  app->add_option("--json", s.json_file, "also write the results as JSON to this file");
+  app->add_option("--scenes", s.scenes,
+                  "only write the study's scenes, in dynamics, to this directory (for phymul run)");
+  app->add_flag("--no-real-time", s.no_realtime, "skip the real-time run");
+  app->add_flag("--no-pictures", s.no_pictures, "skip the PNG pictures and plot");
+  app->add_flag("-q,--quiet", s.quiet, "only the table");
+  return {app, [settings] { return run(*settings); }};
+}
+
+}  // namespace phymul::cli

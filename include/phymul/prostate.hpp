@@ -1,0 +1,110 @@
+// The prostate study (the paper's section 4, DESIGN 7): an endorectal probe pushes the
+// prostate upward; the bladder above it, stitched to it, is nearly empty or full.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "phymul/model.hpp"
+
+namespace phymul::prostate {
+
+enum class Probe { pressure, rigid };
+const char* probe_name(Probe probe);
+
+// Every quantity in SI; README "The prostate study" gives the source of each default.
+struct Options {
+  std::vector<double> fillings{50e-6, 100e-6, 200e-6, 300e-6, 400e-6};  // m^3 of urine
+  std::vector<Probe> probes{Probe::pressure, Probe::rigid};
+  // Prostate: a deformed sphere, volumetric, 4 x 3 x 3 cm (lateral, antero-posterior,
+  // cranio-caudal = height, along z).
+  Vec3 prostate_radii{0.020, 0.015, 0.015};  // m
+  double prostate_density = 1050.0;          // kg/m^3
+  ElasticModel prostate_model = ElasticModel::shape_memory;
+  double prostate_stiffness = 680.0;  // N/m, shape memory K
+  double prostate_young = 20e3;       // Pa, finite elements
+  double prostate_poisson = 0.45;     // finite elements (linear tetrahedra)
+  int prostate_hexahedra = 4;         // per axis, a grid mapped onto the ellipsoid
+  double anchor_fraction = 0.85;      // nodes beyond this share of the half-width are held
+  // Bladder: a surfacic sphere holding the filling, shaped by gravity from its top node.
+  double bladder_wall_mass = 0.040;   // kg
+  double urine_density = 1015.0;      // kg/m^3
+  double bladder_stiffness = 5700.0;  // N/m, shape memory K of the wall
+  int bladder_subdivisions = 3;       // of the icosahedron: 642 nodes
+  double stitch_radius = 0.008;       // m: prostate base nodes this close to its axis are stitched
+  double stitch_tolerance = 0.006;    // m: ... to their nearest bladder node within this
+  // Probe under the prostate, along y (the rectum's direction in this simplified frame).
+  double probe_radius = 0.010;  // m, a transrectal probe is about 2 cm across
+  double probe_force = 2.0;     // N, pressure probe: the force its pressure adds up to
+  double probe_indent = 0.005;  // m: it presses the faces within a probe sunk this deep
+  double probe_lift = 0.004;    // m, rigid probe: how far it rises after touching
+  double gravity = 9.81;        // m/s^2, along -z
+  double damping = 20.0;        // 1/s (dynamic pictures only)
+  double tolerance = 1e-6;      // N, static equilibrium: largest residual nodal force
+  // N, the same with the rigid probe, whose relaxation stalls at about 0.4 % of its force
+  // (README "The prostate study"); at K = 680 N/m 10 mN moves a node by about 15 um.
+  double contact_tolerance = 1e-2;
+  int load_steps = 4;  // the probe's load in this many equilibria
+};
+
+// What one scene of the study is: a filling, a probe and how the scene is run.
+struct SceneSettings {
+  double filling = 0.0;  // m^3
+  Probe probe = Probe::pressure;
+  bool dynamic = false;          // explicit dynamics (the real-time example) or static equilibria
+  double duration = 1.0;         // s
+  double settle_fraction = 0.2;  // the probe starts acting after this share of the duration
+  int load_steps = 5;            // static: equilibria at duration * k / load_steps
+  double pressure = 0.0;         // Pa, pressure probe
+  Vec3 probe_axis_point = Vec3::Zero();  // m: cylinder axis point, or the rigid probe's tip
+};
+
+double bladder_radius(double filling);  // m, of the sphere holding `filling` (m^3)
+std::string scene_text(const Options& options, const SceneSettings& settings);
+
+// One filling, one probe: the state before (gravity alone) and after the probe.
+struct FillingResult {
+  double filling = 0.0;  // m^3, the target volume
+  Probe probe = Probe::pressure;
+  double bladder_volume = 0.0;            // m^3, enclosed at the end
+  double prostate_height = 0.0;           // m, before the probe (top to bottom node)
+  double prostate_deformation_pct = 0.0;  // height lost to the probe, % of that height
+  double centre_displacement = 0.0;       // m, of the prostate's mean node position
+  double probe_force = 0.0;         // N, upward, from the equilibrium of weights and held nodes
+  double pressure_resultant = 0.0;  // N, pressure probe: its pressure summed on its faces
+  double centre_lift = 0.0;         // m, its upward part
+  std::vector<int> stitched;        // global ids of the nodes both organs share
+  int model_nodes = 0;
+  long iterations = 0;              // of the static relaxation, all equilibria
+  std::vector<Vec3> before, after;  // node positions
+};
+
+// Node positions at a load time (s) of a static scene.
+struct Frame {
+  double time = 0.0;
+  std::vector<Vec3> x;
+};
+using Frames = std::vector<Frame>;
+
+struct Study {
+  Options options;
+  std::vector<FillingResult> results;  // fillings in order, each probe in turn
+  double wall_time = 0.0;              // s
+};
+
+// The static scene the study runs for this filling and probe (the rigid probe still out of
+// reach: run_filling places it against the prostate's equilibrium under gravity).
+SceneSettings study_scene(const Options& options, double filling, Probe probe);
+// Equilibrium under gravity, then under the probe in load steps. With an output directory,
+// writes there the scene (<name>.yaml) and every equilibrium (<name>.pvd and its .vtu files,
+// "probe_displacement" from the first), name = run_name.
+FillingResult run_filling(const Options& options, double filling, Probe probe,
+                          const std::filesystem::path& out = {});
+std::string run_name(double filling, Probe probe);  // "50mL_pressure"
+Study run_study(const Options& options, const std::filesystem::path& out = {});
+
+std::string table(const Study& study);
+std::string json(const Study& study);
+
+}  // namespace phymul::prostate
