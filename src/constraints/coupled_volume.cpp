@@ -10,6 +10,11 @@ constexpr int kMax = kMaxJointVolumes;
 using Square = std::array<double, kMax * kMax>;  // row k, column l at [k * kMax + l]
 using Column = std::array<double, kMax>;
 
+// 1 on the axes a node is free to move along, 0 on those a position constraint holds.
+Vec3 free_axes(const Vec3& inverse_mass) {
+  return (inverse_mass.array() > 0.0).cast<double>().matrix();
+}
+
 bool usable(const Model& model) {
   if (model.volumes.empty() || model.volumes.size() > size_t(kMax)) return false;
   for (const VolumeConstraint& c : model.volumes)
@@ -157,6 +162,42 @@ bool project_coupled_volume_velocities(const Model& model, std::span<const Vec3>
   if (!cholesky(n, a)) return false;
   solve(n, a, rates);
   move_along_directions(model, rates, v);
+  return true;
+}
+
+bool remove_coupled_volume_pressures(const Model& model, std::span<const Vec3> x, std::span<Vec3> r,
+                                     std::span<Vec3> grad, bool on_free_axes) {
+  constexpr double kSixth = 1.0 / 6.0;
+  if (!usable(model)) return false;
+  const int n = int(model.volumes.size());
+  Square a{};
+  Column balanced{};
+  for (int k = 0; k < n; ++k) {
+    const VolumeConstraint& c = model.volumes[size_t(k)];
+    six_gradient(model, c, x, grad);
+    double rg = 0.0;
+    for (size_t m = 0; m < c.nodes.size(); ++m) {
+      const int i = c.nodes[m];
+      const Vec3 free_part = grad[i].cwiseProduct(free_axes(model.inverse_mass[size_t(i)]));
+      c.coupled_direction[m] = kSixth * (on_free_axes ? free_part : grad[i]);
+      rg += free_part.dot(r[size_t(i)]);
+    }
+    balanced[size_t(k)] = kSixth * rg;
+    for (int l = 0; l <= k; ++l) {  // F F^T: masking dV_k/dx is enough, d_l may be whole
+      const VolumeConstraint& o = model.volumes[size_t(l)];
+      double product = 0.0;
+      for (size_t m = 0; m < o.nodes.size(); ++m) {
+        const int i = o.nodes[m];
+        product += grad[i]
+                       .cwiseProduct(free_axes(model.inverse_mass[size_t(i)]))
+                       .dot(o.coupled_direction[m]);
+      }
+      a[size_t(k * kMax + l)] = a[size_t(l * kMax + k)] = kSixth * product;
+    }
+  }
+  if (!cholesky(n, a)) return false;
+  solve(n, a, balanced);
+  move_along_directions(model, balanced, r);
   return true;
 }
 

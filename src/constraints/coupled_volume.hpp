@@ -26,4 +26,11 @@ bool project_coupled_volumes(const Model& model, std::span<Vec3> x, double load_
 bool project_coupled_volume_velocities(const Model& model, std::span<const Vec3> x,
                                        std::span<Vec3> v, std::span<Vec3> grad);
 
+// Takes out of the residual r what the volumes' pressures balance together: the
+// least-squares multipliers p of the gradients' free parts F against r, (F F^T) p = F r,
+// removed along those free parts (on_free_axes) or the whole gradients (support reactions).
+// Returns false (r untouched) where project_coupled_volumes would.
+bool remove_coupled_volume_pressures(const Model& model, std::span<const Vec3> x, std::span<Vec3> r,
+                                     std::span<Vec3> grad, bool on_free_axes);
+
 }  // namespace phymul

@@ -156,5 +156,43 @@ TEST(JointVolumes, VelocityProjectionLeavesNoVolumeRateAndMatchesTheSweepsLimit)
   EXPECT_LT(difference, 1e-9 * speed);
 }
 
+TEST(JointVolumes, PressuresRemovedFromAResidualLeaveItOrthogonalToEveryFreeGradient) {
+  // Static relaxation's residual: what the two pressures balance together taken out, nothing
+  // of either free gradient may be left, whether removed along the free or whole gradients.
+  const Model m = two_slabs();
+  const std::vector<Vec3> x = shaken(m, 8);
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<Vec3> r0(size_t(m.node_count())), grad(r0.size());
+  for (Vec3& f : r0) f = Vec3(u(rng), u(rng), u(rng));
+  for (bool on_free_axes : {true, false}) {
+    std::vector<Vec3> r = r0;
+    ASSERT_TRUE(remove_coupled_volume_pressures(m, x, r, grad, on_free_axes));
+    for (const VolumeConstraint& c : m.volumes) {
+      volume_gradient(c, x, grad);
+      double before = 0.0, after = 0.0, scale = 0.0;
+      for (int i : c.nodes) {
+        const Vec3 free_part =
+            grad[i].cwiseProduct((m.inverse_mass[i].array() > 0.0).cast<double>().matrix());
+        before += free_part.dot(r0[i]);
+        after += free_part.dot(r[i]);
+        scale += free_part.norm() * r0[i].norm();
+      }
+      std::printf("%s (%s): F.r %.3g before, %.3g after (scale %.3g)\n", c.component.c_str(),
+                  on_free_axes ? "free" : "whole", before, after, scale);
+      EXPECT_GT(std::abs(before), 1e-3 * scale);
+      EXPECT_LT(std::abs(after), 1e-12 * scale);
+    }
+    double held_changed = 0.0;  // removed along free parts: held axes keep their residual
+    for (size_t i = 0; i < r.size(); ++i)
+      if (m.inverse_mass[i].squaredNorm() == 0.0)
+        held_changed = std::max(held_changed, (r[i] - r0[i]).norm());
+    if (on_free_axes)
+      EXPECT_EQ(held_changed, 0.0);
+    else
+      EXPECT_GT(held_changed, 0.0);  // the supports carry part of the pressures
+  }
+}
+
 }  // namespace
 }  // namespace phymul
