@@ -31,13 +31,16 @@ std::array<double, 4> volume_cubic(const VolumeConstraint& c, std::span<const Ve
 }  // namespace
 
 void volume_gradient(const VolumeConstraint& c, std::span<const Vec3> x, std::span<Vec3> grad) {
+  // The factor 1/6 once per node rather than three times per triangle (a node has about six
+  // triangles): 9 divisions per triangle saved; rounded once, the sum is as accurate.
   for (int i : c.nodes) grad[i].setZero();
   for (const Triangle& t : c.triangles) {
     const Vec3 &a = x[t[0]], &b = x[t[1]], &d = x[t[2]];
-    grad[t[0]] += b.cross(d) / 6.0;
-    grad[t[1]] += d.cross(a) / 6.0;
-    grad[t[2]] += a.cross(b) / 6.0;
+    grad[t[0]] += b.cross(d);
+    grad[t[1]] += d.cross(a);
+    grad[t[2]] += a.cross(b);
   }
+  for (int i : c.nodes) grad[i] /= 6.0;
 }
 
 double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
