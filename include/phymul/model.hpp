@@ -66,6 +66,9 @@ struct VolumeConstraint {
   double target_at(double load_time) const {
     return target_schedule.empty() ? target_volume : target_schedule.at(load_time).x();
   }
+  // Scratch of the joint projection of surfaces sharing nodes (sized by finalize then only):
+  // w_i dV/dx_i per node of `nodes` at the projection's start.
+  mutable std::vector<Vec3> coupled_direction;
 };
 
 struct AppliedForce {

@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "constraints/constraints.hpp"
+#include "constraints/coupled_volume.hpp"
 
 namespace phymul {
 namespace {
@@ -30,13 +31,16 @@ std::array<double, 4> volume_cubic(const VolumeConstraint& c, std::span<const Ve
 }  // namespace
 
 void volume_gradient(const VolumeConstraint& c, std::span<const Vec3> x, std::span<Vec3> grad) {
+  // The factor 1/6 once per node rather than three times per triangle (a node has about six
+  // triangles): 9 divisions per triangle saved; rounded once, the sum is as accurate.
   for (int i : c.nodes) grad[i].setZero();
   for (const Triangle& t : c.triangles) {
     const Vec3 &a = x[t[0]], &b = x[t[1]], &d = x[t[2]];
-    grad[t[0]] += b.cross(d) / 6.0;
-    grad[t[1]] += d.cross(a) / 6.0;
-    grad[t[2]] += a.cross(b) / 6.0;
+    grad[t[0]] += b.cross(d);
+    grad[t[1]] += d.cross(a);
+    grad[t[2]] += a.cross(b);
   }
+  for (int i : c.nodes) grad[i] /= 6.0;
 }
 
 double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
@@ -72,11 +76,13 @@ double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_m
 
 void project_volumes(const Model& model, std::span<Vec3> x, double load_time,
                      std::span<Vec3> scratch) {
-  // Each projection is exact for its own surface; surfaces sharing nodes disturb each other,
-  // so Gauss-Seidel sweeps go on until every volume was already at its target when its
+  // Surfaces sharing nodes: all multipliers at once (coupled_volume.hpp). Where that cannot
+  // be used, each projection is exact for its own surface and they disturb each other, so
+  // Gauss-Seidel sweeps go on until every volume was already at its target when its
   // projection began (the cubic's constant term is that volume: the check is free).
   constexpr double kConverged = 1e-12;  // relative: 100 times below the 1e-10 promised
   constexpr int kMaxSweeps = 500;
+  if (model.coupled_volumes && project_coupled_volumes(model, x, load_time, scratch)) return;
   for (int sweep = 0; sweep < kMaxSweeps; ++sweep) {
     double worst = 0.0;
     for (const VolumeConstraint& c : model.volumes) {
@@ -111,10 +117,11 @@ double remove_volume_rate(const VolumeConstraint& c, std::span<const Vec3> inver
 
 void project_volume_velocities(const Model& model, std::span<const Vec3> x, std::span<Vec3> v,
                                std::span<Vec3> grad) {
-  // Disjoint surfaces: one pass is exact. Coupled ones: Gauss-Seidel on the multipliers
-  // until no constraint has a rate left above round-off.
+  // Disjoint surfaces: one pass is exact. Coupled ones: one joint solve (coupled_volume.hpp),
+  // else Gauss-Seidel on the multipliers until no constraint has a rate left above round-off.
   constexpr double kConverged = 1e-12;
   constexpr int kMaxSweeps = 200;
+  if (model.coupled_volumes && project_coupled_volume_velocities(model, x, v, grad)) return;
   for (int sweep = 0; sweep < kMaxSweeps; ++sweep) {
     double worst = 0.0;
     for (const VolumeConstraint& c : model.volumes)

@@ -42,7 +42,7 @@ std::vector<double> node_masses(const std::string& name, const Mesh& mesh,
   return share;
 }
 
-// Surfaces sharing a node disturb each other's projection: they need sweeps.
+// Surfaces sharing a node disturb each other's projection: they are projected together.
 void mark_coupled_volumes(Model& model) {
   std::vector<char> seen(model.rest_position.size(), 0);
   model.coupled_volumes = false;
@@ -51,6 +51,8 @@ void mark_coupled_volumes(Model& model) {
       if (seen[size_t(i)]) model.coupled_volumes = true;
       seen[size_t(i)] = 1;
     }
+  for (const VolumeConstraint& c : model.volumes)  // the joint projection's directions
+    c.coupled_direction.assign(model.coupled_volumes ? c.nodes.size() : 0, Vec3::Zero());
 }
 
 // Nodes, masses, cells, boundary and node sets of a component's mesh, appended to the model.

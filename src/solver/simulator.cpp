@@ -10,6 +10,7 @@
 
 #include "constraints/constraints.hpp"
 #include "constraints/contact.hpp"
+#include "constraints/coupled_volume.hpp"
 #include "constraints/deformable_contact.hpp"
 #include "constraints/doubled.hpp"
 #include "forces/forces.hpp"
@@ -315,6 +316,9 @@ double Simulator::max_residual_force() {
 void Simulator::remove_volume_pressures(std::vector<Vec3>& r, std::vector<Vec3>& grad,
                                         bool on_free_axes,
                                         std::span<const std::pair<int, Vec3>> contact) const {
+  if (model_.coupled_volumes &&
+      remove_coupled_volume_pressures(model_, state_.x, r, grad, on_free_axes, contact))
+    return;  // all pressures at once
   const int sweeps = model_.coupled_volumes ? 200 : 1;
   for (int sweep = 0; sweep < sweeps; ++sweep) {
     double largest_change = 0.0;

@@ -87,6 +87,28 @@ TEST(Simulator, OrganExampleStepsDoNotAllocate) {
   }
 }
 
+// Surfaces sharing nodes (a prostate stitched to a bladder): the joint volume projection,
+// velocity projection and residual's pressures work in preallocated storage.
+TEST(Simulator, CoupledVolumeStepsDoNotAllocate) {
+  if (!PHYMUL_COUNT_ALLOCATIONS) GTEST_SKIP() << "allocations are counted in the normal build only";
+  const std::filesystem::path scene =
+      std::filesystem::path(PHYMUL_SOURCE_DIR) / "bench" / "coupled_volumes.yaml";
+  for (Integrator integrator : {Integrator::verlet, Integrator::newton_cotes}) {
+    Model model = compile_scene(load_scene(scene));
+    ASSERT_TRUE(model.coupled_volumes);
+    model.settings.integrator = integrator;
+    Simulator sim(model);
+    sim.step();
+    allocations = 0;
+    counting = true;
+    for (int k = 0; k < 50; ++k) sim.step();
+    const double residual = sim.max_residual_force();
+    counting = false;
+    EXPECT_EQ(allocations.load(), 0);
+    EXPECT_GT(residual, 0.0);
+  }
+}
+
 // The environment's interactions too: pressure, a moving rough probe, two coupled volumes
 // (a balloon) and a deformable contact (spatial hash rebuilt every step).
 TEST(Simulator, StepsWithInteractionsDoNotAllocate) {
