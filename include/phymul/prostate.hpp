@@ -42,9 +42,9 @@ struct Options {
   double gravity = 9.81;        // m/s^2, along -z
   double damping = 20.0;        // 1/s (dynamic pictures only)
   double tolerance = 1e-6;      // N, static equilibrium: largest residual nodal force
-  // N, the same with the rigid probe, whose relaxation stalls at about 0.4 % of its force
-  // (README "The prostate study"); at K = 680 N/m 10 mN moves a node by about 15 um.
-  double contact_tolerance = 1e-2;
+  // N, the same with the rigid probe, whose contact slows the relaxation's last digits
+  // (README "The prostate study"); at K = 680 N/m 0.1 mN moves a node by about 0.15 um.
+  double contact_tolerance = 1e-4;
   int load_steps = 4;  // the probe's load in this many equilibria
 };
 

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 #include "phymul/fem.hpp"
@@ -125,6 +126,30 @@ TEST(ExplicitFem, RejectsBadModuliAndSurfaceMeshes) {
   EXPECT_THROW(
       add_elastic_component(model, "s", make_ellipsoid_surface(Vec3(0.01, 0.01, 0.01), 1), m),
       std::invalid_argument);
+}
+
+// The ellipsoid's shells hold wedges: finite elements cut them into tetrahedra. A homogeneous
+// deformation x = F X must then store exactly V W(F), and a rigid motion nothing.
+TEST(ExplicitFemWedges, HomogeneousStretchStoresVolumeTimesEnergyDensity) {
+  const Mesh shells = make_ellipsoid_volume(Vec3(0.02, 0.015, 0.015), 2, 3);
+  Model model;
+  add_elastic_component(model, "prostate", shells, fem_material(0.45));
+  finalize(model);
+  double volume = 0.0;
+  for (const Cell& c : shells.cells) volume += cell_measure(shells.points, c);
+  Eigen::Matrix3d F;
+  F << 1.05, 0.02, 0.0, -0.01, 0.97, 0.03, 0.0, 0.01, 1.02;
+  std::vector<Vec3> x;
+  for (const Vec3& p : model.rest_position) x.push_back(F * p);
+  const double mu = kYoung / (2 * 1.45), kappa = kYoung / (3 * (1 - 2 * 0.45));
+  const double J = F.determinant();
+  const double W = mu / 2 * (std::pow(J, -2.0 / 3.0) * (F.transpose() * F).trace() - 3) +
+                   kappa / 2 * (J - 1) * (J - 1);
+  EXPECT_NEAR(evaluate(model, x).energy, volume * W, 1e-9 * volume * W);
+  std::mt19937 rng(3);
+  const Eigen::Matrix3d R = testing::random_rotation(rng);
+  for (size_t i = 0; i < x.size(); ++i) x[i] = R * model.rest_position[i];
+  for (const Vec3& f : evaluate(model, x).f) EXPECT_LT(f.norm(), 1e-11);
 }
 
 }  // namespace
