@@ -19,6 +19,8 @@ for scene in "$root"/examples/*.yaml; do
 done
 echo "== truthcube (the paper's section 3: beads measured in a compressed silicone cube)"
 "$root/$build/phymul" truthcube -o "$results/truthcube"
+echo "== prostate (the paper's section 4: an endorectal probe, bladder empty to full)"
+"$root/$build/phymul" prostate -o "$results/prostate"
 echo
 echo "Results are in $results/<example>/:"
 echo "  <example>.png            the last frame, coloured by displacement (rest shape in grey)"
@@ -27,3 +29,6 @@ echo "  <example>.pvd            open in ParaView for the whole series (frames: 
 echo "  monitors.csv, report.json"
 echo "and the Truth Cube study in $results/truthcube/: truthcube_errors.png (error per bead"
 echo "layer), truthcube_lsm_18.25pct.png, truthcube.json, beads.csv, *.vtu"
+echo "and the prostate study in $results/prostate/: prostate_deformation.png (deformation,"
+echo "centre displacement and probe force against filling), prostate_empty.png, prostate_full.png,"
+echo "prostate.json, one scene (.yaml) and .pvd series per filling and probe, real_time/report.json"

@@ -1,0 +1,65 @@
+// `phymul prostate` from the command line, and the example scenes it writes.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "phymul/prostate.hpp"
+#include "support/process.hpp"
+
+namespace phymul {
+namespace {
+
+using testing::cli;
+using testing::read_text;
+using testing::run_command;
+using testing::source_dir;
+using testing::TempDir;
+
+TEST(ProstateCli, WritesTheTableTheJsonAndTheSeries) {
+  TempDir dir;
+  const auto json = dir.path() / "p.json";
+  const auto r = run_command(
+      fmt::format("OMP_NUM_THREADS=1 '{}' prostate --fillings 50 --probe pressure --no-pictures "
+                  "--no-real-time -q -o '{}' --json '{}'",
+                  cli(), (dir.path() / "out").string(), json.string()));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("pressure"), std::string::npos) << r.output;
+  const std::string text = read_text(json);
+  EXPECT_EQ(text, read_text(dir.path() / "out" / "prostate.json"));
+  for (const char* key : {"\"fillings\": [", "\"bladder_volume_ml\": 50", "\"probe\": \"pressure\"",
+                          "\"prostate_deformation_pct\": 1", "\"probe_force_n\": 1."})
+    EXPECT_NE(text.find(key), std::string::npos) << key << " in " << text;
+  EXPECT_EQ(text.find("nan"), std::string::npos);
+  // The scene it ran, which `phymul run` takes, and the series of its equilibria.
+  const auto scene = dir.path() / "out" / "50mL_pressure.yaml";
+  EXPECT_EQ(run_command(fmt::format("'{}' check '{}'", cli(), scene.string())).exit_code, 0);
+  const std::string pvd = read_text(dir.path() / "out" / "50mL_pressure.pvd");
+  for (int k = 0; k < 5; ++k) {
+    const std::string vtu = fmt::format("50mL_pressure_{}.vtu", k);
+    EXPECT_NE(pvd.find(vtu), std::string::npos);
+    EXPECT_TRUE(std::filesystem::exists(dir.path() / "out" / vtu));
+  }
+}
+
+TEST(ProstateCli, RefusesAFillingOutOfRange) {
+  const auto r = run_command(fmt::format("'{}' prostate --fillings 2000 -q", cli()));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("--fillings"), std::string::npos) << r.output;
+}
+
+TEST(ProstateExamples, AreTheScenesTheStudyWrites) {
+  const prostate::Options options;
+  for (double ml : {50.0, 400.0})
+    for (prostate::Probe probe : {prostate::Probe::pressure, prostate::Probe::rigid}) {
+      prostate::SceneSettings s = prostate::study_scene(options, ml * 1e-6, probe);
+      s.dynamic = true;
+      const auto file =
+          source_dir() / "examples" / "prostate" / (prostate::run_name(ml * 1e-6, probe) + ".yaml");
+      EXPECT_EQ(read_text(file), prostate::scene_text(options, s)) << file;
+      EXPECT_NO_THROW(compile_scene(load_scene(file))) << file;
+    }
+}
+
+}  // namespace
+}  // namespace phymul
