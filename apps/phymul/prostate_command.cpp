@@ -1,8 +1,10 @@
 #include "prostate_command.hpp"
 
 #include <fmt/format.h>
+#include <omp.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <memory>
@@ -46,6 +48,7 @@ RunReport real_time_check(const Settings& s) {
   write_file_atomically(dir / "scene.yaml", [&](std::ostream& o) { o << text; });
   RunOptions options;
   options.output_dir = dir;
+  omp_set_num_threads(1);  // the measure: real time on one core
   options.progress = !s.quiet && isatty(fileno(stderr));
   return run_scene(load_scene(dir / "scene.yaml"), options);
 }
@@ -74,15 +77,23 @@ int run(Settings& s) {
         }
       return 0;
     }
-    const prostate::Study study = prostate::run_study(o, s.output);
+    const bool show = !s.quiet && isatty(fileno(stderr));
+    const prostate::Study study =
+        prostate::run_study(o, s.output, [show](int done, int total, const std::string& name) {
+          if (show)
+            std::cerr << fmt::format("\rprostate: run {}/{} ({})      ", done + 1, total, name);
+        });
+    if (show) std::cerr << "\r" << std::string(60, ' ') << "\r";
     std::string json = prostate::json(study);
     std::cout << prostate::table(study);
     if (!s.no_realtime) {
       const RunReport r = real_time_check(s);
       std::cout << fmt::format(
-          "real time: the {:.0f} mL pressure scene in dynamics, 1 thread: {} steps of {:.3g} s in "
+          "real time: the {:.0f} mL pressure scene in dynamics, {} thread(s): {} steps of {:.3g} s "
+          "in "
           "{:.3g} s, {:.2f}x real time ({}/real_time/report.json)\n",
-          o.fillings.front() * 1e6, r.steps, r.dt, r.wall_time, r.real_time_factor, s.output);
+          o.fillings.front() * 1e6, r.threads, r.steps, r.dt, r.wall_time, r.real_time_factor,
+          s.output);
       json.insert(json.rfind('}'),
                   fmt::format(",\n  \"real_time_factor\": {:.6g}\n", r.real_time_factor));
     }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -102,7 +103,9 @@ SceneSettings study_scene(const Options& options, double filling, Probe probe);
 FillingResult run_filling(const Options& options, double filling, Probe probe,
                           const std::filesystem::path& out = {});
 std::string run_name(double filling, Probe probe);  // "50mL_pressure"
-Study run_study(const Options& options, const std::filesystem::path& out = {});
+// progress (optional) hears of each run before it starts: its index, the count and its name.
+Study run_study(const Options& options, const std::filesystem::path& out = {},
+                const std::function<void(int, int, const std::string&)>& progress = {});
 
 std::string table(const Study& study);
 std::string json(const Study& study);

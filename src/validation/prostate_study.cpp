@@ -188,12 +188,17 @@ std::string run_name(double filling, Probe probe) {
   return fmt::format("{:.0f}mL_{}", filling * 1e6, probe_name(probe));
 }
 
-Study run_study(const Options& o, const std::filesystem::path& out) {
+Study run_study(const Options& o, const std::filesystem::path& out,
+                const std::function<void(int, int, const std::string&)>& progress) {
   const auto start = std::chrono::steady_clock::now();
   Study study;
   study.options = o;
+  const int total = int(o.fillings.size() * o.probes.size());
   for (double filling : o.fillings)
-    for (Probe probe : o.probes) study.results.push_back(run_filling(o, filling, probe, out));
+    for (Probe probe : o.probes) {
+      if (progress) progress(int(study.results.size()), total, run_name(filling, probe));
+      study.results.push_back(run_filling(o, filling, probe, out));
+    }
   study.wall_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return study;
 }
