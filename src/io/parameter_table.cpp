@@ -423,7 +423,7 @@ std::vector<Parameter> material_parameters() {
        .default_value = "shape-memory",
        .doc = "Elasticity: the paper's local shape memory, or explicit finite elements (TLED: "
               "compressible Neo-Hookean; hexahedra with one point and hourglass control, or "
-              "tetrahedra)."},
+              "tetrahedra, with wedges cut into three tetrahedra each)."},
       {.section = "material",
        .name = "stiffness",
        .kind = Kind::quantity,
