@@ -111,6 +111,14 @@ struct RigidObstacle {
   double friction = 0.0;      // Coulomb coefficient (>= 0) between the shape and the nodes
 };
 
+// A node against a rigid obstacle at some instant: the direction in which the obstacle can
+// push it (unit) and the Coulomb coefficient between them.
+struct ObstacleContact {
+  int node = 0;
+  Vec3 push = Vec3::Zero();
+  double friction = 0.0;
+};
+
 // Two deformable components that may touch but not interpenetrate (frictionless): each
 // surface node of one is kept out of the other's closed boundary, node against triangle.
 struct ContactPair {

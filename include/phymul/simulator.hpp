@@ -103,12 +103,13 @@ class Simulator {
   // Tangent to the volume constraints unless volume_scratch (their gradients, node count) is
   // empty.
   void accelerations(std::vector<Vec3>& a, std::span<Vec3> volume_scratch);
+  void find_obstacle_contacts();  // fills contacts_ at the current positions
+  // Takes out of r what the obstacles in contacts_ can balance (call find_obstacle_contacts).
   void remove_contact_forces(std::vector<Vec3>& r) const;
-  void find_contact_normals();  // fills contact_normals_ at the current positions
   // contact: nodes against an obstacle and its normal there, whose normal push is not
   // evidence of a pressure.
   void remove_volume_pressures(std::vector<Vec3>& r, std::vector<Vec3>& grad, bool on_free_axes,
-                               std::span<const std::pair<int, Vec3>> contact = {}) const;
+                               std::span<const ObstacleContact> contact = {}) const;
   struct ContactStep begin_contact_step(double dt);
   void end_contact_step(double dt);
   void scale_masses_for_relaxation();
@@ -126,10 +127,9 @@ class Simulator {
   // between steps. Only the Newton-Cotes scheme needs a1_ and scratch_.
   std::vector<Vec3> x_start_, v_start_, f_start_, a1_, scratch_;
   std::vector<int> touching_;  // per node: obstacle in contact this step, or -1; obstacles only
-  // Nodes touching an obstacle and its normal there (max_residual_force), sized once.
-  std::vector<std::pair<int, Vec3>> contact_normals_;
-  std::vector<Vec3> contact_impulse_;                       // per obstacle, N s, this step
-  std::vector<Vec3> pair_impulse_;                          // per contact pair, N s, this step
+  std::vector<ObstacleContact> contacts_;  // nodes touching an obstacle now; sized once
+  std::vector<Vec3> contact_impulse_;      // per obstacle, N s, this step
+  std::vector<Vec3> pair_impulse_;         // per contact pair, N s, this step
   std::shared_ptr<DeformableContactWorkspace> deformable_;  // null without contact pairs
   double size_scale_ = 1.0;                                 // m, diagonal of the rest bounding box
   std::vector<double> shortest_edge_;  // m per node, for the runaway guard (runaway_guard.hpp)

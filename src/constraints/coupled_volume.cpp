@@ -168,10 +168,10 @@ bool project_coupled_volume_velocities(const Model& model, std::span<const Vec3>
 
 // A node against an obstacle may push along the contact normal with any force: that part of
 // its residual and of the gradients is left out of the least squares.
-void remove_contact_normals(const Model& model, std::span<const std::pair<int, Vec3>> contact,
+void remove_contact_normals(const Model& model, std::span<const ObstacleContact> contact,
                             std::span<const Vec3> r, Square& a, Column& balanced) {
   const int n = int(model.volumes.size());
-  for (const auto& [i, normal] : contact) {
+  for (const auto& [i, normal, friction] : contact) {
     std::array<double, kMax> along{};  // F_k . normal, F_k the free gradient part (over 6)
     for (int k = 0; k < n; ++k) {
       const VolumeConstraint& c = model.volumes[size_t(k)];
@@ -189,7 +189,7 @@ void remove_contact_normals(const Model& model, std::span<const std::pair<int, V
 
 bool remove_coupled_volume_pressures(const Model& model, std::span<const Vec3> x, std::span<Vec3> r,
                                      std::span<Vec3> grad, bool on_free_axes,
-                                     std::span<const std::pair<int, Vec3>> contact) {
+                                     std::span<const ObstacleContact> contact) {
   constexpr double kSixth = 1.0 / 6.0;
   if (!usable(model)) return false;
   const int n = int(model.volumes.size());

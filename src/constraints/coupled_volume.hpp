@@ -33,6 +33,6 @@ bool project_coupled_volume_velocities(const Model& model, std::span<const Vec3>
 // contact: nodes against an obstacle with its normal there (on_free_axes only).
 bool remove_coupled_volume_pressures(const Model& model, std::span<const Vec3> x, std::span<Vec3> r,
                                      std::span<Vec3> grad, bool on_free_axes,
-                                     std::span<const std::pair<int, Vec3>> contact = {});
+                                     std::span<const ObstacleContact> contact = {});
 
 }  // namespace phymul

@@ -58,7 +58,7 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
     scratch_.assign(n, Vec3::Zero());
   if (!model_.obstacles.empty()) {
     touching_.assign(n, -1);
-    contact_normals_.reserve(size_t(n) * model_.obstacles.size());
+    contacts_.reserve(size_t(n) * model_.obstacles.size());
   }
   contact_impulse_.assign(model_.obstacles.size(), Vec3::Zero());
   pair_impulse_.assign(model_.contact_pairs.size(), Vec3::Zero());
@@ -299,8 +299,8 @@ double Simulator::max_residual_force() {
   for (int i = 0; i < model_.node_count(); ++i)
     r[i] = state_.f[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
   gather_doubled(model_, r);
-  find_contact_normals();
-  remove_volume_pressures(r, x_start_, /*on_free_axes=*/true, contact_normals_);
+  find_obstacle_contacts();
+  remove_volume_pressures(r, x_start_, /*on_free_axes=*/true, contacts_);
   remove_contact_forces(r);
   if (deformable_) add_deformable_contact_forces(*deformable_, dt_, r);
   double largest = 0.0;
@@ -315,7 +315,7 @@ double Simulator::max_residual_force() {
 // below the tolerance (one pass is exact for disjoint ones).
 void Simulator::remove_volume_pressures(std::vector<Vec3>& r, std::vector<Vec3>& grad,
                                         bool on_free_axes,
-                                        std::span<const std::pair<int, Vec3>> contact) const {
+                                        std::span<const ObstacleContact> contact) const {
   if (model_.coupled_volumes &&
       remove_coupled_volume_pressures(model_, state_.x, r, grad, on_free_axes, contact))
     return;  // all pressures at once
@@ -334,7 +334,7 @@ void Simulator::remove_volume_pressures(std::vector<Vec3>& r, std::vector<Vec3>&
       }
       // Against an obstacle a node's push along the contact normal is the contact's to
       // balance, whatever its size: only its tangential part tells the pressure.
-      for (const auto& [i, n] : contact) {
+      for (const auto& [i, n, friction] : contact) {
         const Vec3 free_grad = grad[i].cwiseProduct(free_axes(model_.inverse_mass[i]));
         rg -= r[i].dot(n) * free_grad.dot(n);
         gg -= free_grad.dot(n) * free_grad.dot(n);
@@ -348,13 +348,16 @@ void Simulator::remove_volume_pressures(std::vector<Vec3>& r, std::vector<Vec3>&
   }
 }
 
-void Simulator::find_contact_normals() {
-  contact_normals_.clear();
+// Touching: on the surface, or put on it by the last step's contact stage (the volume
+// projection after it may have moved the node off by a hair).
+void Simulator::find_obstacle_contacts() {
+  contacts_.clear();
   for (const RigidObstacle& o : model_.obstacles) {
     auto add = [&](int i) {
       const SurfaceDistance d = obstacle_distance(o, state_.x[i], load_time_);
       const bool moved = touching_[size_t(i)] == int(&o - model_.obstacles.data());
-      if (std::abs(d.distance) <= kTouching || moved) contact_normals_.push_back({i, d.normal});
+      if (std::abs(d.distance) > kTouching && !moved) return;
+      contacts_.push_back({i, o.keep_inside ? Vec3(-d.normal) : d.normal, o.friction});
     };
     if (o.nodes.empty())
       for (int i = 0; i < model_.node_count(); ++i) add(i);
@@ -366,25 +369,13 @@ void Simulator::find_contact_normals() {
 // A node touching an obstacle can be pushed into it with any force: that part of its
 // residual is the contact's reaction, not an imbalance.
 void Simulator::remove_contact_forces(std::vector<Vec3>& r) const {
-  // Touching: on the surface, or put on it by the last step's contact stage (the volume
-  // projection after it may have moved the node off by a hair).
-  auto remove = [&](const RigidObstacle& o, int i) {
-    const SurfaceDistance d = obstacle_distance(o, state_.x[i], load_time_);
-    const bool moved = touching_[size_t(i)] == int(&o - model_.obstacles.data());
-    if (std::abs(d.distance) > kTouching && !moved) return;
-    const Vec3 push = o.keep_inside ? Vec3(-d.normal) : d.normal;  // how the obstacle can push
+  for (const auto& [i, push, friction] : contacts_) {
     const double into = r[i].dot(push);
-    if (into >= 0.0) return;
+    if (into >= 0.0) continue;
     r[i] -= into * push;
     // Friction holds a tangential force up to mu times the normal one.
-    const double tangential = r[i].norm(), bound = -o.friction * into;
+    const double tangential = r[i].norm(), bound = -friction * into;
     if (tangential > 0.0) r[i] *= tangential <= bound ? 0.0 : (tangential - bound) / tangential;
-  };
-  for (const RigidObstacle& o : model_.obstacles) {
-    if (o.nodes.empty())
-      for (int i = 0; i < model_.node_count(); ++i) remove(o, i);
-    else
-      for (int i : o.nodes) remove(o, i);
   }
 }
 
@@ -474,6 +465,7 @@ StaticResult Simulator::continue_relax(double load_time, long max_iterations,
 void Simulator::fire_update(StaticProgress& fire) {
   std::vector<Vec3>&a = f_start_, &volume_scratch = x_start_;  // free between steps
   accelerations(a, volume_scratch);
+  find_obstacle_contacts();
   remove_contact_forces(a);  // what pushes into an obstacle is not downhill
   const int n = model_.node_count();
   const std::vector<double>& inertia = this->inertia();
