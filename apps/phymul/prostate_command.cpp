@@ -12,6 +12,7 @@
 #include "phymul/prostate.hpp"
 #include "phymul/run.hpp"
 #include "phymul/vtk.hpp"
+#include "pictures.hpp"
 
 namespace phymul::cli {
 namespace {
@@ -24,17 +25,6 @@ struct Settings {
   std::string output = "results/prostate", json_file, scenes;
   bool no_realtime = false, no_pictures = false, quiet = false;
 };
-
-void make_pictures(const Settings& s) {
-  const std::string script = PHYMUL_SOURCE_DIR "/scripts/prostate_pictures.sh";
-  const int rc = std::system(
-      fmt::format("'{}' '{}' {}", script, s.output, s.quiet ? ">/dev/null 2>&1" : "").c_str());
-  if (rc != 0)
-    std::cerr << fmt::format(
-        "warning: the pictures were not made ({} failed; run `make demo` once to install "
-        "python3-matplotlib, python3-vtk9 and xvfb)\n",
-        script);
-}
 
 // The empty bladder's pressure-probe scene in explicit dynamics, timed against the clock.
 RunReport real_time_check(const Settings& s) {
@@ -78,30 +68,28 @@ int run(Settings& s) {
       return 0;
     }
     const bool show = !s.quiet && isatty(fileno(stderr));
-    const prostate::Study study =
+    prostate::Study study =
         prostate::run_study(o, s.output, [show](int done, int total, const std::string& name) {
           if (show)
             std::cerr << fmt::format("\rprostate: run {}/{} ({})      ", done + 1, total, name);
         });
     if (show) std::cerr << "\r" << std::string(60, ' ') << "\r";
-    std::string json = prostate::json(study);
     std::cout << prostate::table(study);
     if (!s.no_realtime) {
       const RunReport r = real_time_check(s);
       std::cout << fmt::format(
           "real time: the {:.0f} mL pressure scene in dynamics, {} thread(s): {} steps of {:.3g} s "
-          "in "
-          "{:.3g} s, {:.2f}x real time ({}/real_time/report.json)\n",
+          "in {:.3g} s, {:.2f}x real time ({}/real_time/report.json)\n",
           o.fillings.front() * 1e6, r.threads, r.steps, r.dt, r.wall_time, r.real_time_factor,
           s.output);
-      json.insert(json.rfind('}'),
-                  fmt::format(",\n  \"real_time_factor\": {:.6g}\n", r.real_time_factor));
+      study.real_time_factor = r.real_time_factor;
     }
+    const std::string json = prostate::json(study);
     write_file_atomically(std::filesystem::path(s.output) / "prostate.json",
                           [&](std::ostream& f) { f << json; });
     if (!s.json_file.empty())
       write_file_atomically(s.json_file, [&](std::ostream& f) { f << json; });
-    if (!s.no_pictures) make_pictures(s);
+    if (!s.no_pictures) make_pictures("prostate_pictures.sh", s.output, s.quiet);
     if (!s.quiet) std::cout << fmt::format("results in {}/\n", s.output);
     return 0;
   } catch (const SceneError& e) {

@@ -9,6 +9,7 @@
 
 #include "phymul/truthcube.hpp"
 #include "phymul/vtk.hpp"
+#include "pictures.hpp"
 
 namespace phymul::cli {
 namespace {
@@ -23,19 +24,6 @@ struct Settings {
   bool quiet = false;
 };
 
-// Pictures need Debian's Python with matplotlib and VTK (make demo installs them): their
-// absence costs the PNGs, never the numbers.
-void make_pictures(const Settings& s) {
-  const std::string script = PHYMUL_SOURCE_DIR "/scripts/truthcube_pictures.sh";
-  const int rc = std::system(
-      fmt::format("'{}' '{}' {}", script, s.output, s.quiet ? ">/dev/null 2>&1" : "").c_str());
-  if (rc != 0)
-    std::cerr << fmt::format(
-        "warning: the pictures were not made ({} failed; run `make demo` "
-        "once to install python3-matplotlib, python3-vtk9 and xvfb)\n",
-        script);
-}
-
 int run(Settings& s) {
   s.study.frame = s.frame == "frame" ? FrameMode::frame : FrameMode::polar;
   s.study.reaction = !s.no_reaction;
@@ -49,7 +37,7 @@ int run(Settings& s) {
       write_file_atomically(s.json_file,
                             [&](std::ostream& o) { o << truthcube::json(study, s.study); });
     std::cout << truthcube::table(study, s.study);
-    if (!s.no_pictures) make_pictures(s);
+    if (!s.no_pictures) make_pictures("truthcube_pictures.sh", s.output, s.quiet);
     if (!s.quiet) std::cout << fmt::format("results in {}/\n", s.output);
     return 0;
   } catch (const std::exception& e) {

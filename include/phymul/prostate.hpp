@@ -92,6 +92,7 @@ struct Study {
   Options options;
   std::vector<FillingResult> results;  // fillings in order, each probe in turn
   double wall_time = 0.0;              // s
+  double real_time_factor = 0.0;       // of the timed dynamic run; 0: not run
 };
 
 // The static scene the study runs for this filling and probe (the rigid probe still out of

@@ -38,10 +38,11 @@ std::string json(const Study& study) {
         r.prostate_deformation_pct, r.prostate_height * 1e3, r.centre_displacement * 1e3,
         r.centre_lift * 1e3, r.probe_force, r.pressure_resultant, r.stitched.size(), r.iterations);
   }
-  j += fmt::format(
-      "\n  ],\n  \"prostate_stiffness_n_per_m\": {:.17g},\n  \"wall_time_s\": {:.6g}\n}}\n",
-      study.options.prostate_stiffness, study.wall_time);
-  return j;
+  j += fmt::format("\n  ],\n  \"prostate_stiffness_n_per_m\": {:.17g},\n  \"wall_time_s\": {:.6g}",
+                   study.options.prostate_stiffness, study.wall_time);
+  if (study.real_time_factor > 0.0)
+    j += fmt::format(",\n  \"real_time_factor\": {:.6g}", study.real_time_factor);
+  return j + "\n}\n";
 }
 
 }  // namespace phymul::prostate

@@ -9,34 +9,16 @@
 namespace phymul {
 namespace {
 
-// The closed surface around the cells of `mesh` whose centroid satisfies `keep`, in the
-// mesh's node ids (the model's, for a single-component model).
-template <class Keep>
-VolumeConstraint surface_of_cells(const Mesh& mesh, const std::string& name, Keep keep) {
-  Mesh part{mesh.points, {}, {}};
-  for (const Cell& cell : mesh.cells) {
-    Vec3 centroid = Vec3::Zero();
-    for (int i : cell.node_span()) centroid += mesh.points[i];
-    if (keep(centroid / cell.node_span().size())) part.cells.push_back(cell);
-  }
-  VolumeConstraint v;
-  v.component = name;
-  v.triangles = boundary_triangles(part);
-  for (const Triangle& t : v.triangles) v.nodes.insert(v.nodes.end(), t.begin(), t.end());
-  std::sort(v.nodes.begin(), v.nodes.end());
-  v.nodes.erase(std::unique(v.nodes.begin(), v.nodes.end()), v.nodes.end());
-  v.target_volume = enclosed_volume(mesh.points, v.triangles);
-  return v;
-}
-
 // An 8 x 4 x 4 cm block whose two halves (x < 0, x > 0) each keep their own volume: the two
 // closed surfaces share the 25 nodes of the wall x = 0.
 Model two_chambers(const Schedule& left_target = {}) {
   const Mesh mesh = make_box(Vec3(0.08, 0.04, 0.04), {8, 4, 4}, CellType::hexa);
   Model model;
   const int c = add_elastic_component(model, "block", mesh, testing::material(20.0));
-  model.volumes.push_back(surface_of_cells(mesh, "left", [](const Vec3& p) { return p.x() < 0; }));
-  model.volumes.push_back(surface_of_cells(mesh, "right", [](const Vec3& p) { return p.x() > 0; }));
+  model.volumes.push_back(
+      testing::surface_of_cells(mesh, "left", [](const Vec3& p) { return p.x() < 0; }));
+  model.volumes.push_back(
+      testing::surface_of_cells(mesh, "right", [](const Vec3& p) { return p.x() > 0; }));
   model.volumes[0].target_schedule = left_target;
   add_fixed_nodes(model, model.components[c].node_sets.at("bottom"));
   // A plate pushed 1 cm down on the top, and gravity: both chambers are squeezed.

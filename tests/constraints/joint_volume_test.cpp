@@ -12,23 +12,6 @@
 namespace phymul {
 namespace {
 
-VolumeConstraint surface_of_cells(const Mesh& mesh, const std::string& name, bool left) {
-  Mesh part{mesh.points, {}, {}};
-  for (const Cell& cell : mesh.cells) {
-    Vec3 centroid = Vec3::Zero();
-    for (int i : cell.node_span()) centroid += mesh.points[i];
-    if ((centroid.x() < 0.0) == left) part.cells.push_back(cell);
-  }
-  VolumeConstraint v;
-  v.component = name;
-  v.triangles = boundary_triangles(part);
-  for (const Triangle& t : v.triangles) v.nodes.insert(v.nodes.end(), t.begin(), t.end());
-  std::sort(v.nodes.begin(), v.nodes.end());
-  v.nodes.erase(std::unique(v.nodes.begin(), v.nodes.end()), v.nodes.end());
-  v.target_volume = enclosed_volume(mesh.points, v.triangles);
-  return v;
-}
-
 // Two 1 x 8 x 8 cm slabs sharing their 8 x 8 cm wall, their outer faces held: what is free of
 // either surface is mostly the shared wall, where the two gradients are opposite. Projecting
 // one chamber undoes most of the other's projection, the worst case for Gauss-Seidel.
@@ -36,8 +19,10 @@ Model two_slabs() {
   const Mesh mesh = make_box(Vec3(0.02, 0.08, 0.08), {4, 8, 8}, CellType::hexa);
   Model model;
   add_elastic_component(model, "slabs", mesh, testing::material(20.0));
-  model.volumes.push_back(surface_of_cells(mesh, "left", true));
-  model.volumes.push_back(surface_of_cells(mesh, "right", false));
+  model.volumes.push_back(
+      testing::surface_of_cells(mesh, "left", [](const Vec3& p) { return p.x() < 0.0; }));
+  model.volumes.push_back(
+      testing::surface_of_cells(mesh, "right", [](const Vec3& p) { return p.x() >= 0.0; }));
   std::vector<int> outer;
   for (int i = 0; i < model.node_count(); ++i)
     if (std::abs(std::abs(mesh.points[i].x()) - 0.01) < 1e-9) outer.push_back(i);

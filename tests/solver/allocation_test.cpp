@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <new>
+#include <utility>
 
 #include "phymul/simulator.hpp"
 #include "support/models.hpp"
@@ -37,6 +38,18 @@ void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 namespace phymul {
 namespace {
 
+// Heap allocations during 50 steps and a residual check, after a first step (which may size
+// what it needs); with the residual, which shows the steps had work to do.
+std::pair<long, double> allocations_in_steps(Simulator& sim) {
+  sim.step();
+  allocations = 0;
+  counting = true;
+  for (int k = 0; k < 50; ++k) sim.step();
+  const double residual = sim.max_residual_force();
+  counting = false;
+  return {allocations.load(), residual};
+}
+
 TEST(Simulator, StepsDoNotAllocate) {
   if (!PHYMUL_COUNT_ALLOCATIONS)
     GTEST_SKIP() << "allocations are counted in the normal build only (AddressSanitizer owns "
@@ -54,13 +67,8 @@ TEST(Simulator, StepsDoNotAllocate) {
     model.settings.integrator = integrator;
     finalize(model);
     Simulator sim(model);
-    sim.step();
-    allocations = 0;
-    counting = true;
-    for (int k = 0; k < 50; ++k) sim.step();
-    const double residual = sim.max_residual_force();
-    counting = false;
-    EXPECT_EQ(allocations.load(), 0);
+    const auto [count, residual] = allocations_in_steps(sim);
+    EXPECT_EQ(count, 0);
     EXPECT_GT(residual, 0.0);
   }
 }
@@ -75,13 +83,8 @@ TEST(Simulator, OrganExampleStepsDoNotAllocate) {
       Model model = compile_scene(load_scene(examples / name));
       model.settings.integrator = integrator;
       Simulator sim(model);
-      sim.step();
-      allocations = 0;
-      counting = true;
-      for (int k = 0; k < 50; ++k) sim.step();
-      const double residual = sim.max_residual_force();
-      counting = false;
-      EXPECT_EQ(allocations.load(), 0) << name;
+      const auto [count, residual] = allocations_in_steps(sim);
+      EXPECT_EQ(count, 0) << name;
       EXPECT_GT(residual, 0.0);
     }
   }
@@ -98,13 +101,8 @@ TEST(Simulator, CoupledVolumeStepsDoNotAllocate) {
     ASSERT_TRUE(model.coupled_volumes);
     model.settings.integrator = integrator;
     Simulator sim(model);
-    sim.step();
-    allocations = 0;
-    counting = true;
-    for (int k = 0; k < 50; ++k) sim.step();
-    const double residual = sim.max_residual_force();
-    counting = false;
-    EXPECT_EQ(allocations.load(), 0);
+    const auto [count, residual] = allocations_in_steps(sim);
+    EXPECT_EQ(count, 0);
     EXPECT_GT(residual, 0.0);
   }
 }
@@ -140,13 +138,8 @@ TEST(Simulator, StepsWithInteractionsDoNotAllocate) {
                                                Vec3(1.2 * model.volumes[1].target_volume, 0, 0)}};
   finalize(model);
   Simulator sim(model);
-  sim.step();
-  allocations = 0;
-  counting = true;
-  for (int k = 0; k < 50; ++k) sim.step();
-  const double residual = sim.max_residual_force();
-  counting = false;
-  EXPECT_EQ(allocations.load(), 0);
+  const auto [count, residual] = allocations_in_steps(sim);
+  EXPECT_EQ(count, 0);
   EXPECT_GT(residual, 0.0);
 }
 

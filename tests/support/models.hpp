@@ -1,7 +1,9 @@
 // Small models shared by the tests.
 #pragma once
 
+#include <algorithm>
 #include <random>
+#include <string>
 
 #include "phymul/model.hpp"
 
@@ -35,6 +37,26 @@ inline Eigen::Matrix3d random_rotation(std::mt19937& rng) {
   std::normal_distribution<double> n(0.0, 1.0);
   Eigen::Quaterniond q(n(rng), n(rng), n(rng), n(rng));
   return q.normalized().toRotationMatrix();
+}
+
+// The closed surface around the cells of `mesh` whose centroid satisfies `keep`, in the
+// mesh's node ids (the model's, for a single-component model).
+template <class Keep>
+inline VolumeConstraint surface_of_cells(const Mesh& mesh, const std::string& name, Keep keep) {
+  Mesh part{mesh.points, {}, {}};
+  for (const Cell& cell : mesh.cells) {
+    Vec3 centroid = Vec3::Zero();
+    for (int i : cell.node_span()) centroid += mesh.points[i];
+    if (keep(centroid / cell.node_span().size())) part.cells.push_back(cell);
+  }
+  VolumeConstraint v;
+  v.component = name;
+  v.triangles = boundary_triangles(part);
+  for (const Triangle& t : v.triangles) v.nodes.insert(v.nodes.end(), t.begin(), t.end());
+  std::sort(v.nodes.begin(), v.nodes.end());
+  v.nodes.erase(std::unique(v.nodes.begin(), v.nodes.end()), v.nodes.end());
+  v.target_volume = enclosed_volume(mesh.points, v.triangles);
+  return v;
 }
 
 }  // namespace phymul::testing
