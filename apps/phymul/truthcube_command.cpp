@@ -20,6 +20,7 @@ struct Settings {
   std::string output = "results/truthcube";
   std::string json_file;
   std::string frame = "polar";
+  std::string fem_hexa = "mean-dilatation";
   bool no_reaction = false, no_volume = false, no_fem = false, no_pictures = false;
   bool quiet = false;
 };
@@ -29,6 +30,7 @@ int run(Settings& s) {
   s.study.reaction = !s.no_reaction;
   s.study.volume_constraint = !s.no_volume;
   s.study.fem = !s.no_fem;
+  s.study.incompatible_modes = s.fem_hexa == "incompatible";
   try {
     const auto beads = truthcube::load_beads(s.data);
     const truthcube::Study study = truthcube::run_study(beads, s.study);
@@ -69,6 +71,11 @@ TruthcubeCommand add_truthcube_command(CLI::App& parent) {
   app->add_flag("--no-pictures", s.no_pictures, "skip the PNG plot and rendering");
   app->add_option("--poisson", s.study.poisson, "FEM Poisson ratio")
       ->check(CLI::Range(0.0, 0.4999))
+      ->capture_default_str();
+  app->add_option(
+         "--fem-hexa", s.fem_hexa,
+         "FEM hexahedron: mean dilatation (Q1/P0) or incompatible modes (CalculiX's C3D8I)")
+      ->check(CLI::IsMember({"mean-dilatation", "incompatible"}))
       ->capture_default_str();
   app->add_option("--tolerance", s.study.tolerance,
                   "shape-memory equilibrium: largest residual force over K h")

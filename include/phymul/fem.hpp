@@ -14,10 +14,17 @@ enum class Law {
   linear,       // small-strain linear elasticity (geometrically linear)
 };
 
+// How a linear hexahedron avoids volumetric locking near nu = 0.5 (src/fem/README.md).
+enum class HexaElement {
+  mean_dilatation,     // Q1/P0: one volume constraint per element (the default)
+  incompatible_modes,  // Wilson's three bubble modes, full integration: CalculiX's C3D8I
+};
+
 struct Material {
   Law law = Law::neo_hookean;
   double young = 14.9e3;  // Pa
   double poisson = 0.499;
+  HexaElement hexa = HexaElement::mean_dilatation;
 };
 
 // A prescribed displacement component (m) reached at the end of the load stepping.

@@ -71,6 +71,7 @@ struct StudyOptions {
   bool fem = true;                // also run the reference FEM
   double young = 14.9e3;          // Pa (FEM; the shape-memory positions do not depend on it)
   double poisson = 0.499;
+  bool incompatible_modes = false;  // FEM hexahedra: Wilson's modes (C3D8I), not Q1/P0
   // Shape-memory equilibrium: largest residual force over K h (the force of a one-cell
   // displacement). On 8^3 cells, relaxing on from 1e-7 to 1e-9 moves no bead by more than
   // 0.15 um (measured), far below the 0.3 mm noise of the beads.

@@ -37,7 +37,13 @@ System::System(const Mesh& mesh, const Material& material, std::vector<char> pre
     e.type = cell.type;
     e.nodes = cell.nodes;
     for (int n : cell.node_span()) used[n] = 1;
-    if (cell.type == CellType::hexa) {
+    if (cell.type == CellType::hexa && material.hexa == HexaElement::incompatible_modes) {
+      e.incompatible = true;
+      e.reference = int(incompatible_.size());
+      incompatible_.push_back(
+          incompatible_hexa_reference(gather_nodes<8>(mesh.points, cell.nodes), int(c)));
+      modes_.push_back(ModeAmplitudes::Zero());
+    } else if (cell.type == CellType::hexa) {
       e.reference = int(hexa_.size());
       hexa_.push_back(hexa_reference(gather_nodes<8>(mesh.points, cell.nodes), int(c)));
     } else {
@@ -103,8 +109,9 @@ Eigen::VectorXd System::body_force(const Vec3& force_density) const {
   for (const Element& e : elements_) {
     const int nn = node_count(e.type);
     for (int a = 0; a < nn; ++a) {
-      const double share = e.type == CellType::hexa ? hexa_[e.reference].nodal_volume(a)
-                                                    : tetra_[e.reference].nodal_volume(a);
+      const double share = e.incompatible             ? incompatible_[e.reference].nodal_volume(a)
+                           : e.type == CellType::hexa ? hexa_[e.reference].nodal_volume(a)
+                                                      : tetra_[e.reference].nodal_volume(a);
       f.segment<3>(3 * e.nodes[a]) += share * force_density;
     }
   }
@@ -118,9 +125,26 @@ bool System::add_element(const ElementReference<NN, NG>& ref, const Element& ele
   for (int a = 0; a < NN; ++a) ue.col(a) = u.segment<3>(3 * element.nodes[a]);
   ElementResult<NN> out;
   if (!evaluate_element<NN, NG>(ref, ue, law_, with_tangent, out)) return false;
+  add_result<NN>(element, out, with_tangent);
+  return true;
+}
+
+bool System::add_incompatible(const Element& element, const Eigen::VectorXd& u, bool with_tangent) {
+  Eigen::Matrix<double, 3, 8> ue;
+  for (int a = 0; a < 8; ++a) ue.col(a) = u.segment<3>(3 * element.nodes[a]);
+  ElementResult<8> out;
+  if (!evaluate_incompatible_hexa(incompatible_[element.reference], ue, law_, with_tangent,
+                                  modes_[element.reference], out))
+    return false;
+  add_result<8>(element, out, with_tangent);
+  return true;
+}
+
+template <int NN>
+void System::add_result(const Element& element, const ElementResult<NN>& out, bool with_tangent) {
   energy_ += out.energy;
   for (int a = 0; a < NN; ++a) internal_.segment<3>(3 * element.nodes[a]) += out.force.col(a);
-  if (!with_tangent) return true;
+  if (!with_tangent) return;
   const int* slot = slot_.data() + element.slots;
   const double* value = out.stiffness.data();  // column-major, same order as the slots
   double* ff = k_ff_.valuePtr();
@@ -132,7 +156,6 @@ bool System::add_element(const ElementReference<NN, NG>& ref, const Element& ele
       fp[-2 - slot[i]] += value[i];
     }
   }
-  return true;
 }
 
 bool System::evaluate(const Eigen::VectorXd& u, bool with_tangent) {
@@ -143,7 +166,8 @@ bool System::evaluate(const Eigen::VectorXd& u, bool with_tangent) {
     std::fill_n(k_fp_.valuePtr(), k_fp_.nonZeros(), 0.0);
   }
   for (const Element& e : elements_) {
-    const bool ok = e.type == CellType::hexa
+    const bool ok = e.incompatible ? add_incompatible(e, u, with_tangent)
+                    : e.type == CellType::hexa
                         ? add_element<8, 8>(hexa_[e.reference], e, u, with_tangent)
                         : add_element<4, 1>(tetra_[e.reference], e, u, with_tangent);
     if (!ok) return false;

@@ -30,6 +30,7 @@ using TetraReference = ElementReference<4, 1>;  // linear, 1 point (exact)
 std::array<Eigen::Matrix<double, 8, 3>, 8> hexa_local_gradients();
 std::array<Eigen::Matrix<double, 8, 1>, 8> hexa_shape_values();
 Eigen::Matrix<double, 8, 3> hexa_local_gradient(const Eigen::Vector3d& xi);
+Eigen::Vector3d hexa_gauss_point(int g);  // in the corner order, point g next to corner g
 
 // Throw std::invalid_argument naming the cell when its Jacobian is not positive at a Gauss
 // point (validate() already rejects such meshes; this guards the element's own quadrature).
@@ -62,5 +63,23 @@ extern template bool evaluate_element<8, 8>(const HexaReference&,
 extern template bool evaluate_element<4, 1>(const TetraReference&,
                                             const Eigen::Matrix<double, 3, 4>&, const LawConstants&,
                                             bool, ElementResult<4>&);
+
+// Hexahedron with Wilson's incompatible modes (CalculiX's C3D8I, hexa_incompatible.cpp): the
+// 8 nodes and 3 bubble modes P_k = 1 - xi_k^2 (rows 8 to 10 of grad, their gradients taken
+// with the centre Jacobian), 2x2x2 Gauss, the law evaluated pointwise.
+using IncompatibleHexaReference = ElementReference<11, 8>;
+IncompatibleHexaReference incompatible_hexa_reference(const Eigen::Matrix<double, 3, 8>& x,
+                                                      int cell_index);
+
+// Amplitudes of the three bubble modes (column k: the displacement vector of mode k), m.
+using ModeAmplitudes = Eigen::Matrix3d;
+
+// Energy, force and tangent of the element once its modes minimise the energy for the nodal
+// displacement u (statically condensed: the modes belong to this element alone). `modes`
+// holds the start of that local solve and returns its solution. False when the deformation
+// inverts the element or the local solve fails.
+bool evaluate_incompatible_hexa(const IncompatibleHexaReference& ref,
+                                const Eigen::Matrix<double, 3, 8>& u, const LawConstants& law,
+                                bool with_tangent, ModeAmplitudes& modes, ElementResult<8>& out);
 
 }  // namespace phymul::fem

@@ -20,13 +20,13 @@ constexpr std::array<std::array<double, 3>, 8> kCorners{{{-1, -1, -1},
                                                          {1, 1, 1},
                                                          {-1, 1, 1}}};
 
-Eigen::Vector3d gauss_point(int g) {
+}  // namespace
+
+Eigen::Vector3d hexa_gauss_point(int g) {
   const double a = 1.0 / std::sqrt(3.0);
   // Gauss points follow the corner order, so point g sits next to corner g.
   return a * Eigen::Vector3d(kCorners[g][0], kCorners[g][1], kCorners[g][2]);
 }
-
-}  // namespace
 
 Eigen::Matrix<double, 8, 3> hexa_local_gradient(const Eigen::Vector3d& xi) {
   Eigen::Matrix<double, 8, 3> d;
@@ -42,14 +42,14 @@ Eigen::Matrix<double, 8, 3> hexa_local_gradient(const Eigen::Vector3d& xi) {
 
 std::array<Eigen::Matrix<double, 8, 3>, 8> hexa_local_gradients() {
   std::array<Eigen::Matrix<double, 8, 3>, 8> out;
-  for (int g = 0; g < 8; ++g) out[g] = hexa_local_gradient(gauss_point(g));
+  for (int g = 0; g < 8; ++g) out[g] = hexa_local_gradient(hexa_gauss_point(g));
   return out;
 }
 
 std::array<Eigen::Matrix<double, 8, 1>, 8> hexa_shape_values() {
   std::array<Eigen::Matrix<double, 8, 1>, 8> out;
   for (int g = 0; g < 8; ++g) {
-    const Eigen::Vector3d xi = gauss_point(g);
+    const Eigen::Vector3d xi = hexa_gauss_point(g);
     for (int a = 0; a < 8; ++a) {
       out[g](a) = 0.125 * (1.0 + kCorners[a][0] * xi[0]) * (1.0 + kCorners[a][1] * xi[1]) *
                   (1.0 + kCorners[a][2] * xi[2]);

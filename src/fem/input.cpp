@@ -25,6 +25,10 @@ void check_material(const Material& m) {
   if (m.law != Law::neo_hookean && m.law != Law::linear) {
     reject("material.law must be neo_hookean or linear (got " + std::to_string(int(m.law)) + ")");
   }
+  if (m.hexa != HexaElement::mean_dilatation && m.hexa != HexaElement::incompatible_modes) {
+    reject("material.hexa must be mean_dilatation or incompatible_modes (got " +
+           std::to_string(int(m.hexa)) + ")");
+  }
   if (!(m.young > 0.0) || !std::isfinite(m.young)) {
     reject("material.young must be finite and > 0 Pa (got " + number(m.young) + ")");
   }

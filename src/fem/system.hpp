@@ -47,8 +47,9 @@ class System {
  private:
   struct Element {
     CellType type = CellType::hexa;
-    int reference = 0;  // index into hexa_ or tetra_
-    int slots = 0;      // offset into slot_ of its (3n)^2 assembly targets
+    bool incompatible = false;  // a hexahedron with incompatible modes (incompatible_)
+    int reference = 0;          // index into hexa_, incompatible_ or tetra_
+    int slots = 0;              // offset into slot_ of its (3n)^2 assembly targets
     std::array<int, 8> nodes{};
   };
 
@@ -56,10 +57,15 @@ class System {
   template <int NN, int NG>
   bool add_element(const ElementReference<NN, NG>& ref, const Element& element,
                    const Eigen::VectorXd& u, bool with_tangent);
+  bool add_incompatible(const Element& element, const Eigen::VectorXd& u, bool with_tangent);
+  template <int NN>
+  void add_result(const Element& element, const ElementResult<NN>& out, bool with_tangent);
 
   LawConstants law_;
   std::vector<HexaReference> hexa_;
   std::vector<TetraReference> tetra_;
+  std::vector<IncompatibleHexaReference> incompatible_;
+  std::vector<ModeAmplitudes> modes_;  // per incompatible_ element: the last local solution
   std::vector<Element> elements_;
   // Per global dof: free index (>= 0) or -1 - prescribed index.
   std::vector<int> dof_index_;

@@ -13,7 +13,9 @@ void run_fem(const Study& study, const std::vector<Bead>& beads, const StudyOpti
   for (int l = 0; l < kLevels; ++l) {
     fem::Problem problem;
     problem.mesh = study.mesh;
-    problem.material = {fem::Law::neo_hookean, options.young, options.poisson};
+    problem.material = {fem::Law::neo_hookean, options.young, options.poisson,
+                        options.incompatible_modes ? fem::HexaElement::incompatible_modes
+                                                   : fem::HexaElement::mean_dilatation};
     problem.load_steps = 4 * (l + 1);
     auto hold = [&](int node, int axis, double value) {
       problem.prescribed.push_back({node, axis, value});

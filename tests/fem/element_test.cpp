@@ -25,8 +25,9 @@ Eigen::VectorXd random_displacement(int size, double amplitude, unsigned seed) {
 }
 
 // A system with every dof free, so K_ff is the full tangent.
-fem::System free_system(const Mesh& mesh, fem::Law law, double poisson) {
-  return fem::System(mesh, {law, kCubeYoung, poisson},
+fem::System free_system(const Mesh& mesh, fem::Law law, double poisson,
+                        fem::HexaElement hexa = fem::HexaElement::mean_dilatation) {
+  return fem::System(mesh, {law, kCubeYoung, poisson, hexa},
                      std::vector<char>(3 * mesh.points.size(), 0));
 }
 
@@ -113,6 +114,7 @@ struct TangentCase {
   CellType type;
   fem::Law law;
   double poisson;
+  fem::HexaElement hexa = fem::HexaElement::mean_dilatation;
 };
 
 class FemTangent : public ::testing::TestWithParam<TangentCase> {};
@@ -124,7 +126,7 @@ class FemTangent : public ::testing::TestWithParam<TangentCase> {};
 TEST_P(FemTangent, MatchesCentralFiniteDifferences) {
   const TangentCase c = GetParam();
   const Mesh mesh = make_box(Vec3::Constant(0.02), {2, 2, 2}, c.type);
-  fem::System s = free_system(mesh, c.law, c.poisson);
+  fem::System s = free_system(mesh, c.law, c.poisson, c.hexa);
   const Eigen::VectorXd u = random_displacement(s.dof_count(), 0.001, 7);
   ASSERT_TRUE(s.evaluate(u, true));
   const Eigen::MatrixXd k = dense_tangent(s);
@@ -157,7 +159,13 @@ INSTANTIATE_TEST_SUITE_P(
                       TangentCase{CellType::tetra, fem::Law::neo_hookean, 0.3},
                       TangentCase{CellType::tetra, fem::Law::neo_hookean, 0.499},
                       TangentCase{CellType::hexa, fem::Law::linear, 0.499},
-                      TangentCase{CellType::tetra, fem::Law::linear, 0.3}));
+                      TangentCase{CellType::tetra, fem::Law::linear, 0.3},
+                      TangentCase{CellType::hexa, fem::Law::neo_hookean, 0.499,
+                                  fem::HexaElement::incompatible_modes},
+                      TangentCase{CellType::hexa, fem::Law::neo_hookean, 0.3,
+                                  fem::HexaElement::incompatible_modes},
+                      TangentCase{CellType::hexa, fem::Law::linear, 0.45,
+                                  fem::HexaElement::incompatible_modes}));
 
 // The linear law is the linearisation of the Neo-Hookean one at rest: for a 1e-6 strain
 // their forces agree to O(strain), i.e. ~1e-6 relative.
