@@ -12,8 +12,10 @@ for scene in "$root"/examples/*.yaml; do
   rm -rf "$out"
   echo "== $name"
   "$root/$build/phymul" run "$scene" -o "$out"
+  # A scene may ask for its picture's options in a comment, e.g. "# picture: --view below".
+  read -r -a picture < <(sed -n 's/^# picture: *//p' "$scene" | head -n 1) || true
   xvfb-run -a "$py" "$root/scripts/render.py" "$out/$name.pvd" "$out/$name.png" \
-    --rest --title "$name: last frame, |displacement|"
+    --rest --title "$name: last frame, |displacement|" "${picture[@]}"
   "$py" "$root/scripts/plot_monitors.py" "$out/monitors.csv" "$out/${name}_monitors.png" \
     --title "$name"
 done

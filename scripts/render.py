@@ -16,6 +16,7 @@ field, 1 when rendering itself fails.
 import argparse
 import math
 import os
+import re
 import sys
 import xml.etree.ElementTree as ET
 
@@ -24,6 +25,7 @@ BACKGROUND = (1.0, 1.0, 1.0)
 TEXT_COLOUR = (0.0, 0.0, 0.0)
 PLAIN_COLOUR = (0.85, 0.55, 0.45)
 REST_COLOUR = (0.72, 0.72, 0.72)
+OBSTACLE_COLOUR = (0.55, 0.58, 0.62)
 SIZE = (1200, 900)
 
 # Viridis, sampled: perceptually uniform and readable in grey scale, unlike a rainbow.
@@ -55,8 +57,9 @@ def parse_args(argv):
     parser.add_argument("--title", default=None, help="title text (default: the file name)")
     parser.add_argument("--rest", action="store_true",
                         help="also draw the undeformed shape as a grey wireframe")
-    parser.add_argument("--view", choices=["iso", "front", "side", "top"], default="iso",
-                        help="camera direction (default: iso)")
+    parser.add_argument("--view", choices=["iso", "below", "front", "side", "top"],
+                        default="iso",
+                        help="camera direction (default: iso, from above; below: from under)")
     return parser.parse_args(argv)
 
 
@@ -82,6 +85,16 @@ def last_frame(pvd_path):
     # Frame names are relative to the collection, not to the working directory.
     path = os.path.join(os.path.dirname(os.path.abspath(pvd_path)), name)
     return path, (time if math.isfinite(time) else None)
+
+
+def obstacle_grid(vtu_path):
+    """The obstacles' surfaces written with a frame (<stem>_obstacles_<n>.vtu), or None."""
+    match = re.match(r"^(.*)_(\d{6})\.vtu$", os.path.basename(vtu_path))
+    if not match:
+        return None
+    path = os.path.join(os.path.dirname(vtu_path),
+                        f"{match.group(1)}_obstacles_{match.group(2)}.vtu")
+    return read_grid(path) if os.path.isfile(path) else None
 
 
 def read_grid(path):
@@ -200,6 +213,7 @@ def set_camera(renderer, view, bounds, leave_room_right):
     # z is up (gravity along -z); directions point from the focal point to the eye.
     direction, up = {
         "iso": ((1.0, -1.0, 0.8), (0.0, 0.0, 1.0)),
+        "below": ((1.0, -1.0, -0.8), (0.0, 0.0, 1.0)),
         "front": ((0.0, -1.0, 0.0), (0.0, 0.0, 1.0)),
         "side": ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
         "top": ((0.0, 0.0, 1.0), (0.0, 1.0, 0.0)),
@@ -207,9 +221,11 @@ def set_camera(renderer, view, bounds, leave_room_right):
     camera.SetFocalPoint(*centre)
     camera.SetPosition(*(c + d for c, d in zip(centre, direction)))
     camera.SetViewUp(*up)
-    camera.SetParallelProjection(view != "iso")
-    renderer.ResetCamera()
-    camera.Zoom(0.85 if view == "iso" else 0.9)
+    perspective = view in ("iso", "below")
+    camera.SetParallelProjection(not perspective)
+    # Framed on the body: an obstacle (a plane, a probe's shaft) may reach far beyond it.
+    renderer.ResetCamera(bounds)
+    camera.Zoom(0.85 if perspective else 0.9)
     if leave_room_right:
         # Moves the model left so that the colour bar on the right does not cover it.
         camera.SetWindowCenter(0.12, 0.0)
@@ -305,6 +321,19 @@ def render(args):
         rest_prop.LightingOff()
         renderer.AddActor(rest_actor)
 
+    obstacles = obstacle_grid(vtu_path)
+    if obstacles is not None:
+        obstacle_mapper = vtkDataSetMapper()
+        obstacle_mapper.SetInputData(obstacles)
+        obstacle_mapper.ScalarVisibilityOff()
+        obstacle_actor = vtkActor()
+        obstacle_actor.SetMapper(obstacle_mapper)
+        obstacle_prop = obstacle_actor.GetProperty()
+        obstacle_prop.SetColor(*OBSTACLE_COLOUR)
+        obstacle_prop.SetOpacity(0.45)
+        obstacle_prop.SetAmbient(0.3)
+        renderer.AddActor(obstacle_actor)
+
     if colour:
         bar = vtkScalarBarActor()
         bar.SetLookupTable(table)
@@ -343,6 +372,8 @@ def render(args):
         notes.append(f"max {label} = {peak:.4g} {unit}".rstrip())
     if rest_field:
         notes.append("grey wireframe: rest shape")
+    if obstacles is not None:
+        notes.append("translucent grey: rigid obstacles")
     notes.append(f"{grid.GetNumberOfPoints()} nodes, {grid.GetNumberOfCells()} cells")
     notes_actor = vtkTextActor()
     notes_actor.SetInput("\n".join(notes))

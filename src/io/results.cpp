@@ -5,6 +5,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "io/obstacle_surface.hpp"
+
 namespace phymul {
 namespace {
 
@@ -29,7 +31,10 @@ std::string json_string(const std::string& s) {
 
 ResultWriter::ResultWriter(std::filesystem::path dir, std::string stem, const Model& model,
                            bool vtk)
-    : dir_(std::move(dir)), stem_(std::move(stem)), vtk_(vtk) {
+    : dir_(std::move(dir)),
+      stem_(std::move(stem)),
+      vtk_(vtk),
+      has_obstacles_(!model.obstacles.empty()) {
   for (int c = 0; c < int(model.components.size()); ++c)
     if (!model.components[c].boundary.empty()) closed_components_.push_back(c);
   const auto path = dir_ / "monitors.csv.tmp";
@@ -73,8 +78,40 @@ void ResultWriter::frame(Simulator& sim) {
   const CellField cells[] = {{"component", m.cell_component}};
   const std::string name = fmt::format("{}_{:06d}.vtu", stem_, pvd_.size());
   write_vtu(dir_ / name, s.x, m.cells, points, cells);
+  write_obstacles(sim, int(pvd_.size()));
   pvd_.push_back({s.time, name});
   write_pvd(dir_ / (stem_ + ".pvd"), pvd_);
+  write_obstacle_pvd();
+}
+
+namespace {
+
+std::string obstacle_frame_name(const std::string& stem, size_t frame) {
+  return fmt::format("{}_obstacles_{:06d}.vtu", stem, frame);
+}
+
+}  // namespace
+
+void ResultWriter::write_obstacles(Simulator& sim, int frame) {
+  const Model& m = sim.model();
+  if (m.obstacles.empty()) return;
+  Vec3 lo = sim.state().x.front(), hi = lo;
+  for (const Vec3& p : sim.state().x) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  std::vector<int> obstacle;
+  const Mesh surfaces = obstacle_surfaces(m.obstacles, sim.load_time(), lo, hi, obstacle);
+  const CellField cells[] = {{"obstacle", obstacle}};
+  write_vtu(dir_ / obstacle_frame_name(stem_, size_t(frame)), surfaces.points, surfaces.cells, {},
+            cells);
+}
+
+// The obstacles' frames are named after the body's, at the same times, so their list
+// follows from the body's (and from a checkpoint's).
+void ResultWriter::write_obstacle_pvd() {
+  if (!has_obstacles_) return;
+  std::vector<PvdEntry> entries;
+  for (size_t k = 0; k < pvd_.size(); ++k)
+    entries.push_back({pvd_[k].time, obstacle_frame_name(stem_, k)});
+  write_pvd(dir_ / (stem_ + "_obstacles.pvd"), entries);
 }
 
 void ResultWriter::monitor(Simulator& sim) {
@@ -104,6 +141,12 @@ void ResultWriter::restore(std::vector<PvdEntry> frames, const std::string& moni
       throw std::runtime_error(fmt::format(
           "cannot resume in {}: frame {} of the checkpoint is missing", dir_.string(), e.file));
   pvd_ = std::move(frames);
+  if (vtk_)
+    for (size_t k = 0; k < pvd_.size(); ++k)
+      if (has_obstacles_ && !std::filesystem::is_regular_file(dir_ / obstacle_frame_name(stem_, k)))
+        throw std::runtime_error(
+            fmt::format("cannot resume in {}: frame {} of the checkpoint is missing", dir_.string(),
+                        obstacle_frame_name(stem_, k)));
   const auto path = dir_ / "monitors.csv.tmp";
   monitors_.close();
   monitors_.open(path, std::ios::trunc);

@@ -16,7 +16,9 @@ namespace phymul {
 class ResultWriter {
  public:
   ResultWriter(std::filesystem::path dir, std::string stem, const Model& model, bool vtk);
-  void frame(Simulator& sim);            // one .vtu, and the .pvd rewritten to list it
+  // One .vtu, and the .pvd rewritten to list it; with obstacles, their surfaces at that
+  // instant too, in <stem>_obstacles_<frame>.vtu listed by <stem>_obstacles.pvd.
+  void frame(Simulator& sim);
   void monitor(Simulator& sim);          // one row of monitors.csv
   void finish(const RunReport& report);  // monitors.csv complete, report.json
   int frames() const { return int(pvd_.size()); }
@@ -31,12 +33,15 @@ class ResultWriter {
   std::filesystem::path dir_;
   std::string stem_;
   bool vtk_;
+  bool has_obstacles_;
   std::vector<int> closed_components_;
   std::vector<PvdEntry> pvd_;
   std::ofstream monitors_;
   std::string monitors_text_;  // what monitors_ was given
   double monitored_time_ = std::numeric_limits<double>::quiet_NaN();
   void write_monitors(const std::string& text);
+  void write_obstacles(Simulator& sim, int frame);
+  void write_obstacle_pvd();
   std::vector<double> displacement_, velocity_, force_;  // flat xyz buffers for the writer
 };
 
