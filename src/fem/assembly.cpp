@@ -28,7 +28,12 @@ int value_position(const SparseMatrix& m, int row, int col) {
 }  // namespace
 
 System::System(const Mesh& mesh, const Material& material, std::vector<char> prescribed)
-    : law_{material.law, moduli(material)} {
+    : System(mesh, std::vector<Material>{material}, std::vector<int>(mesh.cells.size(), 0),
+             std::move(prescribed)) {}
+
+System::System(const Mesh& mesh, const std::vector<Material>& materials,
+               const std::vector<int>& cell_material, std::vector<char> prescribed) {
+  for (const Material& m : materials) laws_.push_back({m.law, moduli(m)});
   const int nodes = int(mesh.points.size());
   std::vector<char> used(nodes, 0);
   for (std::size_t c = 0; c < mesh.cells.size(); ++c) {
@@ -36,6 +41,7 @@ System::System(const Mesh& mesh, const Material& material, std::vector<char> pre
     Element e;
     e.type = cell.type;
     e.nodes = cell.nodes;
+    e.law = cell_material[c];
     for (int n : cell.node_span()) used[n] = 1;
     if (cell.type == CellType::hexa) {
       e.reference = int(hexa_.size());
@@ -117,7 +123,7 @@ bool System::add_element(const ElementReference<NN, NG>& ref, const Element& ele
   Eigen::Matrix<double, 3, NN> ue;
   for (int a = 0; a < NN; ++a) ue.col(a) = u.segment<3>(3 * element.nodes[a]);
   ElementResult<NN> out;
-  if (!evaluate_element<NN, NG>(ref, ue, law_, with_tangent, out)) return false;
+  if (!evaluate_element<NN, NG>(ref, ue, laws_[element.law], with_tangent, out)) return false;
   energy_ += out.energy;
   for (int a = 0; a < NN; ++a) internal_.segment<3>(3 * element.nodes[a]) += out.force.col(a);
   if (!with_tangent) return true;
