@@ -2,6 +2,8 @@
 // The yardstick the shape-memory model is measured against, cross-checked with CalculiX.
 #pragma once
 
+#include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -34,14 +36,33 @@ struct Dirichlet {
   double value = 0.0;
 };
 
+// The equilibrium at the end of one load step (Problem::on_load_step).
+struct LoadStepReport {
+  int step = 0, steps = 0;                // 1-based
+  const std::vector<Vec3>& displacement;  // m, per node
+  const std::vector<Vec3>& reaction;      // N, per node (see Result)
+  int newton_iterations = 0;              // so far
+  double residual = 0.0;                  // N, largest free residual component
+};
+
 struct Problem {
   Mesh mesh;  // hexahedra or tetrahedra (linear), positions in m
   Material material;
+  // Several materials (one per object of a scene): cell c is of materials[cell_material[c]];
+  // when `materials` is empty every cell is of `material`.
+  std::vector<Material> materials;
+  std::vector<int> cell_material;
   std::vector<Dirichlet> prescribed;
   Vec3 body_force = Vec3::Zero();  // N/m^3 (e.g. density * gravity), scaled with the load
+  std::vector<Vec3> nodal_force;   // N per node (dead loads), scaled with the load; empty: none
   int load_steps = 10;
-  double tolerance = 1e-10;        // relative: |residual| <= tolerance * |reaction| (or 1e-12 N)
+  double tolerance = 1e-10;  // relative: |residual| <= tolerance * |reaction| (or 1e-12 N)
+  // N: the largest free residual component must also be at most this (a scene's tolerance).
+  double force_tolerance = std::numeric_limits<double>::infinity();
   int max_newton_iterations = 30;  // per load step
+  // Called after each converged load step; returning false stops the solve there
+  // (Result::stopped, e.g. on an interruption request).
+  std::function<bool(const LoadStepReport&)> on_load_step;
 };
 
 struct Result {
@@ -52,6 +73,8 @@ struct Result {
                                    // only on prescribed components at equilibrium)
   int newton_iterations = 0;       // total over all load steps
   double final_residual = 0.0;     // N, largest free residual component
+  int load_steps_done = 0;         // converged load steps
+  bool stopped = false;            // on_load_step asked to stop (converged stays false)
 };
 
 // Static equilibrium by Newton's method with load steps, a line search and a sparse direct

@@ -48,6 +48,13 @@ struct RunReport {
   int frames = 0;
   bool converged = false;  // static mode
   double residual = 0.0;   // N, static mode: final largest residual force
+  // Static mode with `solver: newton` (report.json has these only then): Newton iterations
+  // (also in `steps`), converged load steps, and the sum of the support reactions and of the
+  // applied loads (gravity and forces) at the last equilibrium, which balance.
+  bool newton = false;
+  int load_steps_done = 0, load_steps = 0;
+  Eigen::Vector3d support_reaction = Eigen::Vector3d::Zero();  // N
+  Eigen::Vector3d applied_load = Eigen::Vector3d::Zero();      // N
 };
 
 // Compiles and runs the scene, writing into options.output_dir (created if missing; a

@@ -41,6 +41,9 @@ enum class Integrator { verlet, newton_cotes };
 enum class SolveMode { dynamic, static_equilibrium };
 enum class FrameMode { polar, frame };
 enum class Relaxation { fire, kinetic, viscous };
+// How static mode finds the equilibrium: damped pseudo-dynamics of any model, or the reference
+// finite elements' Newton method (fem objects only; solver/newton_run.hpp).
+enum class StaticSolver { relaxation, newton };
 
 struct SimulationSpec {
   std::optional<double> dt;  // s; nullopt = "auto"
@@ -53,8 +56,10 @@ struct SimulationSpec {
   double tolerance = 1e-6;        // N, static mode: largest residual nodal force
   long max_iterations = 1000000;  // static mode
   int load_steps = 1;             // static mode: equilibria at duration * k / load_steps
-  Relaxation relaxation = Relaxation::kinetic;  // static mode: how energy is taken out
-  bool relaxation_mass_scaling = true;          // static mode: fictitious masses (Simulator)
+  Relaxation relaxation = Relaxation::kinetic;     // static mode: how energy is taken out
+  bool relaxation_mass_scaling = true;             // static mode: fictitious masses (Simulator)
+  StaticSolver solver = StaticSolver::relaxation;  // static mode
+  SourceLoc solver_loc;                            // of `solver`; line 0 when absent
   SourceLoc loc;
 };
 
@@ -79,15 +84,20 @@ struct MeshSpec {
 // How an elastic component resists deformation: the paper's local shape memory, or explicit
 // finite elements (TLED: hexahedra with one point and hourglass control, or tetrahedra).
 enum class ElasticModel { shape_memory, fem };
+// The finite elements' law: compressible Neo-Hookean (TLED and Newton) or small-strain linear
+// elasticity (Newton only).
+enum class FemLaw { neo_hookean, linear };
 
 struct MaterialSpec {
   ElasticModel model = ElasticModel::shape_memory;
-  double stiffness = 0.0;         // N/m, shape memory spring of each node
-  double young = 0.0;             // Pa, fem: compressible Neo-Hookean
-  double poisson = 0.0;           // fem, in (-1, 0.5)
-  double hourglass = 0.3;         // fem hexahedra: hourglass stiffness over the shear one
-  std::optional<double> density;  // kg/m^3 (volumetric meshes)
-  std::optional<double> mass;     // kg, total, spread by lumped cell measure
+  double stiffness = 0.0;            // N/m, shape memory spring of each node
+  double young = 0.0;                // Pa, fem: compressible Neo-Hookean
+  double poisson = 0.0;              // fem, in (-1, 0.5)
+  double hourglass = 0.3;            // fem hexahedra (TLED): hourglass over the shear stiffness
+  FemLaw law = FemLaw::neo_hookean;  // fem
+  SourceLoc law_loc;                 // of `law`; line 0 when absent
+  std::optional<double> density;     // kg/m^3 (volumetric meshes)
+  std::optional<double> mass;        // kg, total, spread by lumped cell measure
   FrameMode frame = FrameMode::polar;
   bool reaction = true;  // apply -f/n to the neighbours (momentum kept)
   SourceLoc loc;

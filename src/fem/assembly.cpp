@@ -28,7 +28,12 @@ int value_position(const SparseMatrix& m, int row, int col) {
 }  // namespace
 
 System::System(const Mesh& mesh, const Material& material, std::vector<char> prescribed)
-    : law_{material.law, moduli(material)} {
+    : System(mesh, std::vector<Material>{material}, std::vector<int>(mesh.cells.size(), 0),
+             std::move(prescribed)) {}
+
+System::System(const Mesh& mesh, const std::vector<Material>& materials,
+               const std::vector<int>& cell_material, std::vector<char> prescribed) {
+  for (const Material& m : materials) laws_.push_back({m.law, moduli(m)});
   const int nodes = int(mesh.points.size());
   std::vector<char> used(nodes, 0);
   for (std::size_t c = 0; c < mesh.cells.size(); ++c) {
@@ -36,8 +41,10 @@ System::System(const Mesh& mesh, const Material& material, std::vector<char> pre
     Element e;
     e.type = cell.type;
     e.nodes = cell.nodes;
+    e.law = cell_material[c];
     for (int n : cell.node_span()) used[n] = 1;
-    if (cell.type == CellType::hexa && material.hexa == HexaElement::incompatible_modes) {
+    if (cell.type == CellType::hexa &&
+        materials[size_t(e.law)].hexa == HexaElement::incompatible_modes) {
       e.incompatible = true;
       e.reference = int(incompatible_.size());
       incompatible_.push_back(
@@ -124,7 +131,7 @@ bool System::add_element(const ElementReference<NN, NG>& ref, const Element& ele
   Eigen::Matrix<double, 3, NN> ue;
   for (int a = 0; a < NN; ++a) ue.col(a) = u.segment<3>(3 * element.nodes[a]);
   ElementResult<NN> out;
-  if (!evaluate_element<NN, NG>(ref, ue, law_, with_tangent, out)) return false;
+  if (!evaluate_element<NN, NG>(ref, ue, laws_[element.law], with_tangent, out)) return false;
   add_result<NN>(element, out, with_tangent);
   return true;
 }
@@ -133,8 +140,8 @@ bool System::add_incompatible(const Element& element, const Eigen::VectorXd& u, 
   Eigen::Matrix<double, 3, 8> ue;
   for (int a = 0; a < 8; ++a) ue.col(a) = u.segment<3>(3 * element.nodes[a]);
   ElementResult<8> out;
-  if (!evaluate_incompatible_hexa(incompatible_[element.reference], ue, law_, with_tangent,
-                                  modes_[element.reference], out))
+  if (!evaluate_incompatible_hexa(incompatible_[element.reference], ue, laws_[element.law],
+                                  with_tangent, modes_[element.reference], out))
     return false;
   add_result<8>(element, out, with_tangent);
   return true;

@@ -37,6 +37,25 @@ void check_material(const Material& m) {
   }
 }
 
+void check_materials(const Problem& p) {
+  if (p.materials.empty()) {
+    check_material(p.material);
+    return;
+  }
+  for (const Material& m : p.materials) check_material(m);
+  if (p.cell_material.size() != p.mesh.cells.size()) {
+    reject("cell_material must have one entry per cell (" + std::to_string(p.mesh.cells.size()) +
+           "; got " + std::to_string(p.cell_material.size()) + ")");
+  }
+  for (std::size_t c = 0; c < p.cell_material.size(); ++c) {
+    const int m = p.cell_material[c];
+    if (m < 0 || std::size_t(m) >= p.materials.size()) {
+      reject("cell_material[" + std::to_string(c) + "] must be in [0, " +
+             std::to_string(p.materials.size()) + ") (got " + std::to_string(m) + ")");
+    }
+  }
+}
+
 void check_cells(const Mesh& mesh) {
   if (mesh.cells.empty()) reject("mesh.cells is empty");
   const std::size_t points = mesh.points.size();
@@ -89,6 +108,19 @@ void check_controls(const Problem& p) {
   if (!(p.tolerance > 0.0 && p.tolerance < 1.0)) {
     reject("tolerance must be in (0, 1) (got " + number(p.tolerance) + ")");
   }
+  if (!(p.force_tolerance > 0.0)) {
+    reject("force_tolerance must be > 0 N (got " + number(p.force_tolerance) + ")");
+  }
+  if (!p.nodal_force.empty() && p.nodal_force.size() != p.mesh.points.size()) {
+    reject("nodal_force must be empty or have one entry per node (" +
+           std::to_string(p.mesh.points.size()) + "; got " + std::to_string(p.nodal_force.size()) +
+           ")");
+  }
+  for (std::size_t n = 0; n < p.nodal_force.size(); ++n) {
+    if (!p.nodal_force[n].allFinite()) {
+      reject("nodal_force[" + std::to_string(n) + "] must be finite");
+    }
+  }
   if (!p.body_force.allFinite()) {
     reject("body_force must be finite (got " + number(p.body_force.x()) + ", " +
            number(p.body_force.y()) + ", " + number(p.body_force.z()) + ")");
@@ -98,7 +130,7 @@ void check_controls(const Problem& p) {
 }  // namespace
 
 void check_problem(const Problem& problem) {
-  check_material(problem.material);
+  check_materials(problem);
   check_controls(problem);
   check_cells(problem.mesh);
   check_prescribed(problem);

@@ -2,7 +2,8 @@
 //
 // Convergence: the largest free residual component is at most tolerance * max(reaction norm,
 // external load norm), with an absolute floor of 1e-12 N (a load-free or purely rigid state
-// has a zero scale and a round-off residual), AND the last update was below
+// has a zero scale and a round-off residual) and at most NewtonSettings::force_tolerance (N,
+// a scene's tolerance), AND the last update was below
 // sqrt(tolerance) * max(|u|, 1e-6 L): with quadratic convergence a residual at tolerance
 // follows an update at about sqrt(tolerance), so this rejects only a residual that is small
 // for the wrong reason (a soft direction), at the price of at most one extra iteration.
@@ -58,7 +59,8 @@ double LoadStepper::threshold(double s) const {
   const Eigen::VectorXd r = system_.internal_force() - s * body_;
   const double reaction = system_.gather(r, system_.prescribed_dofs()).norm();
   const double load = s * body_.norm();
-  return std::max(settings_.tolerance * std::max(reaction, load), kAbsoluteResidualFloor);
+  return std::min(std::max(settings_.tolerance * std::max(reaction, load), kAbsoluteResidualFloor),
+                  settings_.force_tolerance);
 }
 
 double LoadStepper::update_tolerance() const {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -15,6 +16,7 @@ struct NewtonSettings {
   double tolerance = 1e-10;   // relative to the reaction / load scale
   int max_iterations = 30;    // Newton corrections per increment
   double length_scale = 1.0;  // m, mesh bounding-box diagonal (floor of the update test)
+  double force_tolerance = std::numeric_limits<double>::infinity();  // N, absolute cap
 };
 
 using StepFailure = FactorFailure;

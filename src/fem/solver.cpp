@@ -33,6 +33,8 @@
 //
 // Reactions: internal minus external force per node (non-zero only on prescribed components
 // at equilibrium).
+// Several materials (Problem::materials, per cell) and nodal dead loads (Problem::nodal_force,
+// scaled with the load like the body force) let a scene of several objects be one system.
 #include <cmath>
 #include <sstream>
 
@@ -107,21 +109,44 @@ std::string advance(LoadStepper& stepper, int step, int steps) {
 Result solve_static(const Problem& problem) {
   check_problem(problem);
   const PrescribedValues prescribed = prescribed_values(problem);
-  System system(problem.mesh, problem.material, prescribed.mask);
+  System system =
+      problem.materials.empty()
+          ? System(problem.mesh, problem.material, prescribed.mask)
+          : System(problem.mesh, problem.materials, problem.cell_material, prescribed.mask);
   Eigen::VectorXd target = Eigen::Map<const Eigen::VectorXd>(prescribed.value.data(),
                                                              Eigen::Index(prescribed.value.size()));
   const NewtonSettings settings{problem.tolerance, problem.max_newton_iterations,
-                                bounding_box_diagonal(problem.mesh)};
+                                bounding_box_diagonal(problem.mesh), problem.force_tolerance};
   NodeGeometry geometry{{}, problem.mesh.points};
   for (int dof : system.free_dofs()) geometry.group.push_back(dof / 3);
-  LoadStepper stepper(system, system.body_force(problem.body_force), std::move(target), geometry,
-                      settings);
+  Eigen::VectorXd load = system.body_force(problem.body_force);
+  for (std::size_t n = 0; n < problem.nodal_force.size(); ++n)
+    load.segment<3>(3 * Eigen::Index(n)) += problem.nodal_force[n];
+  LoadStepper stepper(system, std::move(load), std::move(target), geometry, settings);
 
   Result result;
   result.converged = true;
   for (int step = 1; step <= problem.load_steps && result.converged; ++step) {
     result.message = advance(stepper, step, problem.load_steps);
     result.converged = result.message.empty();
+    if (!result.converged) break;
+    result.load_steps_done = step;
+    if (problem.on_load_step) {
+      result.displacement = per_node(stepper.displacement());
+      result.reaction = per_node(stepper.reaction());
+      const LoadStepReport report{step,
+                                  problem.load_steps,
+                                  result.displacement,
+                                  result.reaction,
+                                  stepper.iterations(),
+                                  stepper.free_residual()};
+      if (!problem.on_load_step(report) && step < problem.load_steps) {
+        result.converged = false;
+        result.stopped = true;
+        result.message = "fem::solve_static: stopped after load step " + std::to_string(step) +
+                         " of " + std::to_string(problem.load_steps);
+      }
+    }
   }
   result.displacement = per_node(stepper.displacement());
   result.reaction = per_node(stepper.reaction());

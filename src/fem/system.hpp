@@ -20,6 +20,9 @@ class System {
   // stiffness, so their components are treated as prescribed too (at whatever value the
   // caller imposes, zero by default). The mesh must be valid hexa/tetra (checked before).
   System(const Mesh& mesh, const Material& material, std::vector<char> prescribed);
+  // Cell c of materials[cell_material[c]] (several objects in one system).
+  System(const Mesh& mesh, const std::vector<Material>& materials,
+         const std::vector<int>& cell_material, std::vector<char> prescribed);
 
   int dof_count() const { return int(dof_index_.size()); }
   int free_count() const { return int(free_dofs_.size()); }
@@ -50,6 +53,7 @@ class System {
     bool incompatible = false;  // a hexahedron with incompatible modes (incompatible_)
     int reference = 0;          // index into hexa_, incompatible_ or tetra_
     int slots = 0;              // offset into slot_ of its (3n)^2 assembly targets
+    int law = 0;                // index into laws_
     std::array<int, 8> nodes{};
   };
 
@@ -61,7 +65,7 @@ class System {
   template <int NN>
   void add_result(const Element& element, const ElementResult<NN>& out, bool with_tangent);
 
-  LawConstants law_;
+  std::vector<LawConstants> laws_;
   std::vector<HexaReference> hexa_;
   std::vector<TetraReference> tetra_;
   std::vector<IncompatibleHexaReference> incompatible_;

@@ -21,6 +21,7 @@ const Condition kRound{"generator", {"ellipsoid", "cylinder"}};
 const Condition kShapeMemory{"model", {"shape-memory"}};
 const Condition kFem{"model", {"fem"}};
 const Condition kVolume{"surface", {"false"}};
+const Condition kStatic{"mode", {"static"}};
 const Condition kDisplacement{"type", {"displacement"}};
 const Condition kRigid{"type", {"rigid"}};
 const Condition kActive{"type", {"active"}};
@@ -185,7 +186,8 @@ std::vector<Parameter> simulation_parameters() {
        .kind = Kind::choice,
        .choices = {"dynamic", "static"},
        .default_value = "dynamic",
-       .doc = "`dynamic`: motion over time; `static`: equilibria by damped relaxation."},
+       .doc = "`dynamic`: motion over time; `static`: equilibria (by damped relaxation or Newton, "
+              "see `solver`)."},
       {.section = "simulation",
        .name = "gravity",
        .kind = Kind::vector,
@@ -227,6 +229,19 @@ std::vector<Parameter> simulation_parameters() {
               "at kinetic-energy peaks; fire: turned towards the force and zeroed when going "
               "uphill (Bitzek et al. 2006), about twice as fast without contacts, but it can "
               "stall on them; viscous: only the scene's damping."},
+      {.section = "simulation",
+       .name = "solver",
+       .kind = Kind::choice,
+       .choices = {"relaxation", "newton"},
+       .default_value = "relaxation",
+       .when = {kStatic},
+       .doc = "Static mode: `relaxation` (damped pseudo-dynamics, any model) or `newton` (the "
+              "reference finite elements: fully integrated hexahedra with mean dilatation or "
+              "tetrahedra, Newton with a line search and a sparse Cholesky, `load_steps` "
+              "scaling the end-time loads). Newton takes `model: fem` objects, stitches, "
+              "gravity, `force` loads, `fixed` and `displacement` constraints; it converges "
+              "when the largest residual is below `tolerance` and 1e-10 of the loads; "
+              "`max_iterations`, `relaxation`, `dt` and `damping` do not apply to it."},
   };
 }
 
@@ -423,7 +438,8 @@ std::vector<Parameter> material_parameters() {
        .default_value = "shape-memory",
        .doc = "Elasticity: the paper's local shape memory, or explicit finite elements (TLED: "
               "compressible Neo-Hookean; hexahedra with one point and hourglass control, or "
-              "tetrahedra, with wedges cut into three tetrahedra each)."},
+              "tetrahedra, with wedges cut into three tetrahedra each; with `solver: newton`, "
+              "the same elements solved implicitly)."},
       {.section = "material",
        .name = "stiffness",
        .kind = Kind::quantity,
@@ -454,7 +470,17 @@ std::vector<Parameter> material_parameters() {
        .range = closed(0.0, 1.0),
        .default_value = "0.3",
        .when = {kFem},
-       .doc = "Hexahedra: hourglass stiffness as a fraction of the element's shear stiffness."},
+       .doc = "Hexahedra: hourglass stiffness as a fraction of the element's shear stiffness "
+              "(TLED only: `solver: newton` integrates hexahedra fully and has no hourglass "
+              "modes)."},
+      {.section = "material",
+       .name = "law",
+       .kind = Kind::choice,
+       .choices = {"neo-hookean", "linear"},
+       .default_value = "neo-hookean",
+       .when = {kFem},
+       .doc = "Finite-element law: compressible Neo-Hookean (large deformation), or "
+              "small-strain linear elasticity (`solver: newton` only)."},
       {.section = "material",
        .name = "density",
        .kind = Kind::quantity,

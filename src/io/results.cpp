@@ -162,6 +162,24 @@ void ResultWriter::finish(const RunReport& report) {
   write_file_atomically(dir_ / "report.json", [&](std::ostream& o) { o << report_json(report); });
 }
 
+namespace {
+
+std::string json_vector(const Eigen::Vector3d& v) {
+  return fmt::format("[{}, {}, {}]", json_number(v.x()), json_number(v.y()), json_number(v.z()));
+}
+
+// The fields only a Newton run has (RunReport::newton).
+std::string newton_fields(const RunReport& r) {
+  if (!r.newton) return "";
+  return fmt::format(
+      ",\n  \"solver\": \"newton\",\n  \"newton_iterations\": {},\n  \"load_steps\": {},\n"
+      "  \"load_steps_done\": {},\n  \"support_reaction_N\": {},\n  \"applied_load_N\": {}",
+      r.steps, r.load_steps, r.load_steps_done, json_vector(r.support_reaction),
+      json_vector(r.applied_load));
+}
+
+}  // namespace
+
 std::string report_json(const RunReport& r) {
   return fmt::format(
       "{{\n  \"status\": {},\n  \"message\": {},\n  \"mode\": {},\n  \"steps\": {},\n  "
@@ -170,11 +188,12 @@ std::string report_json(const RunReport& r) {
       "\"dt_s\": {},\n"
       "  \"stable_dt_s\": {},\n  \"nodes\": {},\n  \"threads\": {},\n  \"frames\": {},\n"
       "  \"converged\": {},\n"
-      "  \"final_residual_force_N\": {}\n}}\n",
+      "  \"final_residual_force_N\": {}{}\n}}\n",
       json_string(r.status), json_string(r.message), json_string(r.mode), r.steps,
       json_number(r.simulated_time), json_number(r.wall_time), json_number(r.ns_per_node_per_step),
       json_number(r.real_time_factor), json_number(r.dt), json_number(r.stable_dt), r.nodes,
-      r.threads, r.frames, r.converged ? "true" : "false", json_number(r.residual));
+      r.threads, r.frames, r.converged ? "true" : "false", json_number(r.residual),
+      newton_fields(r));
 }
 
 }  // namespace phymul

@@ -253,6 +253,9 @@ SimulationSpec SceneBuilder::simulation(SectionReader& reader) {
               {{"fire", Relaxation::fire},
                {"kinetic", Relaxation::kinetic},
                {"viscous", Relaxation::viscous}});
+  reader.read("solver", spec.solver,
+              {{"relaxation", StaticSolver::relaxation}, {"newton", StaticSolver::newton}});
+  spec.solver_loc = reader.value_loc("solver").value_or(SourceLoc{});
   reader.done();
   return spec;
 }
@@ -410,6 +413,8 @@ MaterialSpec SceneBuilder::material(SectionReader& reader) {
   reader.read("young", spec.young);
   reader.read("poisson", spec.poisson);
   reader.read("hourglass", spec.hourglass);
+  reader.read("law", spec.law, {{"neo-hookean", FemLaw::neo_hookean}, {"linear", FemLaw::linear}});
+  spec.law_loc = reader.value_loc("law").value_or(SourceLoc{});
   reader.read("density", spec.density);
   reader.read("mass", spec.mass);
   reader.read("frame", spec.frame, {{"polar", FrameMode::polar}, {"frame", FrameMode::frame}});

@@ -11,6 +11,7 @@
 #include "io/units.hpp"
 #include "model/compile_interactions.hpp"
 #include "phymul/model.hpp"
+#include "solver/newton_run.hpp"
 
 namespace phymul {
 namespace {
@@ -229,6 +230,7 @@ Model compile_scene(const Scene& scene) {
   k.model.settings = scene.simulation;
   k.model.gravity = scene.simulation.gravity;
   k.model.damping = scene.simulation.damping;
+  check_newton_scene(scene, k.problems);
   for (const ObjectSpec& o : scene.objects) k.add_object(o);
   if (k.problems.empty()) add_links(k, scene);
   if (k.problems.empty()) {

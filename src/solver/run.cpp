@@ -15,6 +15,7 @@
 #include "io/results.hpp"
 #include "io/units.hpp"
 #include "phymul/simulator.hpp"
+#include "solver/newton_run.hpp"
 
 namespace phymul {
 namespace {
@@ -267,6 +268,9 @@ void install_interrupt_handlers() {
 }
 
 RunReport run_scene(const Scene& scene, const RunOptions& options) {
+  if (scene.simulation.mode == SolveMode::static_equilibrium &&
+      scene.simulation.solver == StaticSolver::newton)
+    return run_newton(scene, options);
   std::error_code ec;
   if (std::filesystem::exists(options.output_dir, ec) &&
       !std::filesystem::is_directory(options.output_dir, ec))

@@ -125,3 +125,47 @@ TEST(FemSolve, OneLoadStepReachesTheSameEquilibriumAsTen) {
 
 }  // namespace
 }  // namespace phymul
+
+namespace phymul {
+namespace {
+
+TEST(FemInput, PerCellMaterialsAndNodalForcesAreChecked) {
+  using fem_test::contains;
+  const auto reject = [](const std::function<void(fem::Problem&)>& spoil) {
+    fem::Problem p = fem_test::bonded_compression(1, 0.05, 0.45, CellType::hexa, 1);
+    spoil(p);
+    try {
+      (void)fem::solve_static(p);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_TRUE(contains(reject([](fem::Problem& p) {
+                         p.materials = {p.material, p.material};
+                       }),
+                       "cell_material must have one entry per cell (1; got 0)"));
+  EXPECT_TRUE(contains(reject([](fem::Problem& p) {
+                         p.materials = {p.material};
+                         p.cell_material = {1};
+                       }),
+                       "cell_material[0] must be in [0, 1) (got 1)"));
+  EXPECT_TRUE(contains(reject([](fem::Problem& p) {
+                         p.materials = {p.material};
+                         p.materials[0].poisson = 0.7;
+                         p.cell_material = {0};
+                       }),
+                       "material.poisson must be in (-1, 0.5) (got 0.7)"));
+  EXPECT_TRUE(contains(reject([](fem::Problem& p) { p.nodal_force.assign(3, Vec3::Zero()); }),
+                       "nodal_force must be empty or have one entry per node (8; got 3)"));
+  EXPECT_TRUE(contains(reject([](fem::Problem& p) {
+                         p.nodal_force.assign(8, Vec3::Zero());
+                         p.nodal_force[2].x() = std::numeric_limits<double>::infinity();
+                       }),
+                       "nodal_force[2] must be finite"));
+  EXPECT_TRUE(contains(reject([](fem::Problem& p) { p.force_tolerance = 0.0; }),
+                       "force_tolerance must be > 0 N (got 0)"));
+}
+
+}  // namespace
+}  // namespace phymul

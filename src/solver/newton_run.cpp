@@ -1,0 +1,246 @@
+#include "solver/newton_run.hpp"
+
+#include <fmt/format.h>
+#include <omp.h>
+
+#include <chrono>
+#include <cstdio>
+#include <map>
+#include <stdexcept>
+
+#include "io/checkpoint.hpp"
+#include "io/results.hpp"
+#include "phymul/simulator.hpp"
+
+namespace phymul {
+namespace {
+
+bool uses_newton(const SimulationSpec& s) {
+  return s.mode == SolveMode::static_equilibrium && s.solver == StaticSolver::newton;
+}
+
+// Where `solver: newton` was written, for messages that point at it.
+std::string newton_at(const SimulationSpec& s) {
+  return s.solver_loc.line > 0 ? fmt::format(" (line {})", s.solver_loc.line) : "";
+}
+
+void check_objects(const Scene& scene, std::vector<Diagnostic>& problems) {
+  const std::string at = newton_at(scene.simulation);
+  for (const ObjectSpec& o : scene.objects) {
+    if (o.type != ObjectType::elastic) {
+      problems.push_back(
+          {o.loc, fmt::format("object '{}' is {}: 'solver: newton'{} takes elastic objects with "
+                              "'material: {{model: fem}}' only; use 'solver: relaxation'",
+                              o.name, o.type == ObjectType::rigid ? "rigid" : "active", at)});
+      continue;
+    }
+    if (o.material.model != ElasticModel::fem)
+      problems.push_back(
+          {o.material.loc,
+           fmt::format("object '{}' has a shape-memory material: 'solver: newton'{} takes "
+                       "'model: fem' materials only (young, poisson, law); use 'solver: "
+                       "relaxation' for shape memory",
+                       o.name, at)});
+    if (o.volume_constraint)
+      problems.push_back(
+          {o.loc, fmt::format("object '{}': 'volume_constraint' is not supported by 'solver: "
+                              "newton'{}; give the fem material a Poisson ratio near 0.5 "
+                              "instead (hexahedra do not lock), or use 'solver: relaxation'",
+                              o.name, at)});
+  }
+}
+
+template <class Spec>
+void refuse_all(const std::vector<Spec>& specs, const char* what, const std::string& at,
+                std::vector<Diagnostic>& problems) {
+  for (const Spec& s : specs)
+    problems.push_back(
+        {s.loc, fmt::format("{} are not supported by 'solver: newton'{}: it takes 'force' "
+                            "loads, 'fixed' and 'displacement' constraints, stitches and "
+                            "gravity; use 'solver: relaxation'",
+                            what, at)});
+}
+
+}  // namespace
+
+void check_newton_scene(const Scene& scene, std::vector<Diagnostic>& problems) {
+  const bool newton = uses_newton(scene.simulation);
+  for (const ObjectSpec& o : scene.objects)
+    if (!newton && o.material.model == ElasticModel::fem && o.material.law == FemLaw::linear)
+      problems.push_back(
+          {o.material.law_loc.line > 0 ? o.material.law_loc : o.material.loc,
+           fmt::format("object '{}': 'law: linear' needs the implicit solver (simulation: "
+                       "{{mode: static, solver: newton}}); the explicit finite elements (TLED) "
+                       "are Neo-Hookean only",
+                       o.name)});
+  if (!newton) return;
+  check_objects(scene, problems);
+  const std::string at = newton_at(scene.simulation);
+  refuse_all(scene.pressures, "pressure loads", at, problems);
+  refuse_all(scene.obstacles, "obstacles", at, problems);
+  refuse_all(scene.contacts, "contacts", at, problems);
+  refuse_all(scene.doubled, "doubled nodes", at, problems);
+}
+
+namespace {
+
+fem::Material material_of(const Scene& scene, const std::string& component) {
+  for (const ObjectSpec& o : scene.objects)
+    if (o.name == component)
+      return {o.material.law == FemLaw::linear ? fem::Law::linear : fem::Law::neo_hookean,
+              o.material.young, o.material.poisson};
+  throw std::logic_error(fmt::format("newton_problem: no object named '{}'", component));
+}
+
+}  // namespace
+
+fem::Problem newton_problem(const Scene& scene, const Model& model) {
+  fem::Problem p;
+  p.mesh.points = model.rest_position;
+  for (const ExplicitFem& e : model.explicit_fem) {
+    const int material = int(p.materials.size());
+    p.materials.push_back(material_of(scene, e.component));
+    const int n = e.nodes_per_cell;
+    for (size_t k = 0; k < e.volume.size(); ++k) {
+      Cell cell;
+      cell.type = n == 8 ? CellType::hexa : CellType::tetra;
+      for (int a = 0; a < n; ++a) cell.nodes[size_t(a)] = e.cells[k * size_t(n) + size_t(a)];
+      p.mesh.cells.push_back(cell);
+      p.cell_material.push_back(material);
+    }
+  }
+  const double end = scene.simulation.duration;
+  // A component prescribed twice takes the last value, as the relaxation's projection does.
+  std::map<int, double> prescribed;
+  for (const PrescribedDisplacement& d : model.prescribed) {
+    const Vec3 value = d.displacement.at(end);
+    for (int i : d.nodes)
+      for (int a = 0; a < 3; ++a)
+        if (d.axes[size_t(a)]) prescribed[3 * i + a] = value[a];
+  }
+  for (const auto& [dof, value] : prescribed) p.prescribed.push_back({dof / 3, dof % 3, value});
+  p.nodal_force.assign(model.rest_position.size(), Vec3::Zero());
+  for (const AppliedForce& f : model.forces) {
+    const Vec3 force = f.force.at(end);
+    for (int i : f.nodes) p.nodal_force[size_t(i)] += force;
+  }
+  for (int i = 0; i < model.node_count(); ++i)
+    p.nodal_force[size_t(i)] += model.mass[size_t(i)] * model.gravity;
+  p.load_steps = scene.simulation.load_steps;
+  p.force_tolerance = scene.simulation.tolerance;
+  return p;
+}
+
+namespace {
+
+// The equilibrium of a load step into the simulator's state, which the writers read: the
+// force on a node is minus the reaction (State::f holds every force on it, the supports'
+// excepted, so support_reactions() = -f on the held axes).
+void set_state(Simulator& sim, const std::vector<Vec3>& u, const std::vector<Vec3>& reaction,
+               double time) {
+  State& s = sim.state();
+  const Model& m = sim.model();
+  for (int i = 0; i < m.node_count(); ++i) {
+    s.x[size_t(i)] = m.rest_position[size_t(i)] + u[size_t(i)];
+    s.v[size_t(i)].setZero();
+    s.f[size_t(i)] = -reaction[size_t(i)];
+  }
+  s.time = time;
+}
+
+void sum_reactions(const Model& model, const fem::Problem& problem, const fem::Result& result,
+                   double load_factor, RunReport& report) {
+  std::vector<std::array<bool, 3>> held(model.rest_position.size(), {false, false, false});
+  for (const fem::Dirichlet& d : problem.prescribed) held[size_t(d.node)][size_t(d.axis)] = true;
+  report.support_reaction.setZero();
+  for (size_t i = 0; i < held.size(); ++i)
+    for (int a = 0; a < 3; ++a)
+      if (held[i][size_t(a)]) report.support_reaction[a] += result.reaction[i][a];
+  report.applied_load.setZero();
+  for (const Vec3& f : problem.nodal_force) report.applied_load += load_factor * f;
+}
+
+void refuse_checkpoints(const RunOptions& options) {
+  if (options.resume)
+    throw std::invalid_argument(
+        "--resume: a static Newton run (solver: newton) keeps no checkpoint; run it again");
+  if (options.checkpoint_every.steps > 0 || options.checkpoint_every.time > 0.0)
+    throw std::invalid_argument(
+        "--checkpoint-every: a static Newton run (solver: newton) keeps no checkpoint; its load "
+        "steps are written as frames as they converge");
+}
+
+fem::Result solve(const Scene& scene, const fem::Problem& problem) {
+  try {
+    return fem::solve_static(problem);
+  } catch (const std::invalid_argument& e) {  // what the scene checks do not catch
+    throw SceneError({{scene.simulation.loc.line > 0 ? scene.simulation.loc
+                                                     : SourceLoc{scene.file.string(), 0, 0},
+                       e.what()}});
+  }
+}
+
+}  // namespace
+
+RunReport run_newton(const Scene& scene, const RunOptions& options) {
+  refuse_checkpoints(options);
+  std::error_code ec;
+  if (std::filesystem::exists(options.output_dir, ec) &&
+      !std::filesystem::is_directory(options.output_dir, ec))
+    throw std::runtime_error(fmt::format("output directory '{}' exists and is not a directory",
+                                         options.output_dir.string()));
+  Simulator sim(compile_scene(scene));
+  const Model& model = sim.model();
+  fem::Problem problem = newton_problem(scene, model);
+  std::filesystem::create_directories(options.output_dir);
+  ResultWriter out(options.output_dir, scene.file.stem().string(), model, scene.output.vtk);
+  RunReport report;
+  report.mode = "static";
+  report.newton = true;
+  report.load_steps = problem.load_steps;
+  report.nodes = model.node_count();
+  report.threads = omp_get_max_threads();
+  out.frame(sim);
+  out.monitor(sim);
+  const double duration = scene.simulation.duration;
+  const auto start = std::chrono::steady_clock::now();
+  problem.on_load_step = [&](const fem::LoadStepReport& r) {
+    set_state(sim, r.displacement, r.reaction, duration * r.step / r.steps);
+    out.monitor(sim);
+    out.frame(sim);
+    if (options.progress)
+      std::fprintf(stderr, "load step %d of %d: %d Newton iterations, residual %.3g N\n", r.step,
+                   r.steps, r.newton_iterations, r.residual);
+    return !interrupt_requested() &&
+           !(options.stop_after_steps > 0 && r.newton_iterations >= options.stop_after_steps);
+  };
+  const fem::Result result = solve(scene, problem);
+  report.wall_time =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  report.steps = result.newton_iterations;
+  report.load_steps_done = result.load_steps_done;
+  report.converged = result.converged;
+  report.residual = result.final_residual;
+  report.simulated_time = duration * result.load_steps_done / problem.load_steps;
+  report.frames = out.frames();
+  sum_reactions(model, problem, result, double(result.load_steps_done) / problem.load_steps,
+                report);
+  if (result.stopped) {
+    report.status = "interrupted";
+    report.message = fmt::format(
+        "interrupted after load step {} of {}; its equilibrium is the last frame. A Newton run "
+        "keeps no checkpoint: run it again for the rest",
+        result.load_steps_done, problem.load_steps);
+  } else if (!result.converged) {
+    report.status = "not-converged";
+    report.message = fmt::format(
+        "{}. The frames hold the {} converged load step(s) of {}; raise load_steps, or check "
+        "that the constraints hold the objects (a free rigid motion has no equilibrium)",
+        result.message, result.load_steps_done, problem.load_steps);
+  }
+  std::filesystem::remove(checkpoint_path(options.output_dir), ec);
+  out.finish(report);
+  return report;
+}
+
+}  // namespace phymul
