@@ -87,6 +87,9 @@ enum class ElasticModel { shape_memory, fem };
 // The finite elements' law: compressible Neo-Hookean (TLED and Newton) or small-strain linear
 // elasticity (Newton only).
 enum class FemLaw { neo_hookean, linear };
+// The implicit solver's hexahedron (README "Validation"): mean dilatation (Q1/P0), or Wilson's
+// incompatible modes (CalculiX's C3D8I).
+enum class FemHexa { mean_dilatation, incompatible_modes };
 
 struct MaterialSpec {
   ElasticModel model = ElasticModel::shape_memory;
@@ -96,8 +99,10 @@ struct MaterialSpec {
   double hourglass = 0.3;            // fem hexahedra (TLED): hourglass over the shear stiffness
   FemLaw law = FemLaw::neo_hookean;  // fem
   SourceLoc law_loc;                 // of `law`; line 0 when absent
-  std::optional<double> density;     // kg/m^3 (volumetric meshes)
-  std::optional<double> mass;        // kg, total, spread by lumped cell measure
+  FemHexa hexa = FemHexa::mean_dilatation;  // fem hexahedra, Newton only
+  SourceLoc hexa_loc;                       // of `hexa`; line 0 when absent
+  std::optional<double> density;            // kg/m^3 (volumetric meshes)
+  std::optional<double> mass;               // kg, total, spread by lumped cell measure
   FrameMode frame = FrameMode::polar;
   bool reaction = true;  // apply -f/n to the neighbours (momentum kept)
   SourceLoc loc;

@@ -482,6 +482,15 @@ std::vector<Parameter> material_parameters() {
        .doc = "Finite-element law: compressible Neo-Hookean (large deformation), or "
               "small-strain linear elasticity (`solver: newton` only)."},
       {.section = "material",
+       .name = "hexa",
+       .kind = Kind::choice,
+       .choices = {"mean-dilatation", "incompatible-modes"},
+       .default_value = "mean-dilatation",
+       .when = {kFem},
+       .doc = "`solver: newton` hexahedra: mean dilatation (Q1/P0, no locking near nu = 0.5), "
+              "or Wilson's incompatible modes (CalculiX's C3D8I: bends exactly, a little stiffer "
+              "near nu = 0.5, 3-8 times slower)."},
+      {.section = "material",
        .name = "density",
        .kind = Kind::quantity,
        .dimension = Dimension::density,

@@ -415,6 +415,10 @@ MaterialSpec SceneBuilder::material(SectionReader& reader) {
   reader.read("hourglass", spec.hourglass);
   reader.read("law", spec.law, {{"neo-hookean", FemLaw::neo_hookean}, {"linear", FemLaw::linear}});
   spec.law_loc = reader.value_loc("law").value_or(SourceLoc{});
+  reader.read("hexa", spec.hexa,
+              {{"mean-dilatation", FemHexa::mean_dilatation},
+               {"incompatible-modes", FemHexa::incompatible_modes}});
+  spec.hexa_loc = reader.value_loc("hexa").value_or(SourceLoc{});
   reader.read("density", spec.density);
   reader.read("mass", spec.mass);
   reader.read("frame", spec.frame, {{"polar", FrameMode::polar}, {"frame", FrameMode::frame}});

@@ -73,6 +73,15 @@ void check_newton_scene(const Scene& scene, std::vector<Diagnostic>& problems) {
                        "{{mode: static, solver: newton}}); the explicit finite elements (TLED) "
                        "are Neo-Hookean only",
                        o.name)});
+  for (const ObjectSpec& o : scene.objects)
+    if (!newton && o.material.model == ElasticModel::fem &&
+        o.material.hexa == FemHexa::incompatible_modes)
+      problems.push_back(
+          {o.material.hexa_loc.line > 0 ? o.material.hexa_loc : o.material.loc,
+           fmt::format("object '{}': 'hexa: incompatible-modes' needs the implicit solver "
+                       "(simulation: {{mode: static, solver: newton}}); the explicit finite "
+                       "elements (TLED) use one-point hexahedra with hourglass control",
+                       o.name)});
   if (!newton) return;
   check_objects(scene, problems);
   const std::string at = newton_at(scene.simulation);
@@ -88,7 +97,9 @@ fem::Material material_of(const Scene& scene, const std::string& component) {
   for (const ObjectSpec& o : scene.objects)
     if (o.name == component)
       return {o.material.law == FemLaw::linear ? fem::Law::linear : fem::Law::neo_hookean,
-              o.material.young, o.material.poisson};
+              o.material.young, o.material.poisson,
+              o.material.hexa == FemHexa::incompatible_modes ? fem::HexaElement::incompatible_modes
+                                                             : fem::HexaElement::mean_dilatation};
   throw std::logic_error(fmt::format("newton_problem: no object named '{}'", component));
 }
 
