@@ -250,10 +250,14 @@ constraints:
   - {type: displacement, object: cube, nodes: top, axes: z,
      schedule: [{t: 0, value: [0, 0, 0]}, {t: 1, value: [0, 0, -0.015]}]}
 )";
+  const auto check = testing::run_command(testing::cli() + " check " + scene_file.string());
+  EXPECT_EQ(check.exit_code, 0) << check.output;
+  EXPECT_NE(check.output.find("static, Newton"), std::string::npos) << check.output;
   const auto out = dir.path() / "out";
-  const auto r = testing::run_command(testing::cli() + " run --quiet " + scene_file.string() +
-                                      " -o " + out.string());
+  const auto r = testing::run_command(testing::cli() + " run " + scene_file.string() + " -o " +
+                                      out.string());
   EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_NE(r.output.find("not-converged after 0 of 1 load steps"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("did not converge"), std::string::npos) << r.output;
   const std::string json = testing::read_text(out / "report.json");
   EXPECT_NE(json.find("\"status\": \"not-converged\""), std::string::npos) << json;
