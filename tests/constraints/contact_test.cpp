@@ -14,13 +14,7 @@ using Shape = RigidObstacle::Shape;
 
 RigidObstacle shape(Shape kind, const Vec3& point, const Vec3& axis, double radius = 0.0,
                     double length = 0.0) {
-  RigidObstacle o;
-  o.shape = kind;
-  o.point = point;
-  o.axis = axis.normalized();
-  o.radius = radius;
-  o.length = length;
-  return o;
+  return testing::obstacle(kind, point, axis, radius, length);
 }
 
 void expect_vec_near(const Vec3& a, const Vec3& b, double tol) {

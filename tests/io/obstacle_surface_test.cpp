@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "constraints/contact.hpp"
+#include "support/models.hpp"
 #include "support/process.hpp"
 
 namespace phymul {
@@ -17,12 +18,7 @@ namespace {
 using Shape = RigidObstacle::Shape;
 
 RigidObstacle shape(Shape s, const Vec3& point, const Vec3& axis, double radius, double length) {
-  RigidObstacle o;
-  o.shape = s;
-  o.point = point;
-  o.axis = axis.normalized();
-  o.radius = radius;
-  o.length = length;
+  RigidObstacle o = testing::obstacle(s, point, axis, radius, length);
   o.motion = Schedule{{0.0, 1.0}, {Vec3::Zero(), Vec3(0.0, 0.01, 0.02)}};
   return o;
 }

@@ -59,4 +59,16 @@ inline VolumeConstraint surface_of_cells(const Mesh& mesh, const std::string& na
   return v;
 }
 
+// A rigid obstacle of the given shape, fixed (tests add motion where they need it).
+inline RigidObstacle obstacle(RigidObstacle::Shape kind, const Vec3& point, const Vec3& axis,
+                              double radius = 0.0, double length = 0.0) {
+  RigidObstacle o;
+  o.shape = kind;
+  o.point = point;
+  o.axis = axis.normalized();
+  o.radius = radius;
+  o.length = length;
+  return o;
+}
+
 }  // namespace phymul::testing
