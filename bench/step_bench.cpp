@@ -25,6 +25,24 @@ BENCHMARK(BM_Step)
     ->ArgsProduct({{10, 20, 30, 40}, {1}})
     ->Args({40, 2})
     ->Unit(benchmark::kMillisecond);
+// The same step with every shape-memory node on the scalar path, in node order (the kernel
+// before the batched one): what the batched kernel gains, measured in one binary.
+void BM_StepScalar(benchmark::State& state) {
+  omp_set_num_threads(int(state.range(1)));
+  phymul::Model model = phymul::bench::pushed_cube(int(state.range(0)));
+  for (phymul::ShapeMemory& m : model.shape_memory) {
+    for (size_t k = 0; k < m.batch_order.size(); ++k) m.batch_order[k] = int(k);
+    m.batched_end.assign(m.plan.block_start.begin(), m.plan.block_start.end() - 1);
+  }
+  phymul::Simulator sim(std::move(model));
+  phymul::bench::time_steps(state, sim);
+  state.counters["threads"] = double(state.range(1));
+}
+BENCHMARK(BM_StepScalar)
+    ->Args({10, 1})
+    ->Args({40, 1})
+    ->Args({40, 2})
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_StepFem)->ArgsProduct({{10, 40}, {1}})->Args({40, 2})->Unit(benchmark::kMillisecond);
 
 // Time to equilibrium: an 80 mm cube of n^3 hexahedra, volume kept, base fixed, top pushed
