@@ -1,6 +1,7 @@
 #include "forces/shape_memory_batch.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 namespace phymul {
@@ -45,6 +46,9 @@ PHYMUL_LANES V3 cross(const V3& a, const V3& b) {
            a.v[0] * b.v[1] - a.v[1] * b.v[0]}};
 }
 PHYMUL_LANES D splat(double s) { return D{} + s; }
+PHYMUL_LANES D sqrt(D v) {
+  return D{std::sqrt(v[0]), std::sqrt(v[1]), std::sqrt(v[2]), std::sqrt(v[3])};
+}
 PHYMUL_LANES bool any(const Mask& m) { return (m[0] | m[1] | m[2] | m[3]) != 0; }
 
 // The W points p[id[l]].
@@ -150,12 +154,17 @@ void plan_polar_batches(ShapeMemory& m) {
   m.batch_order.reserve(m.nodes.size());
   m.batched_end.reserve(size_t(m.plan.blocks()));
   std::vector<int> lanes, others;
-  auto count = [&m](int k) { return int(m.neighbours.row(k).size()); };
+  // Lanes share their neighbour count and whether they carry the normal pair.
+  auto count = [&m](int k) {
+    return 2 * int(m.neighbours.row(k).size()) + (m.framed.find(k) >= 0 ? 1 : 0);
+  };
   for (int b = 0; b < m.plan.blocks(); ++b) {
     lanes.clear();
     others.clear();
     for (int k = m.plan.block_start[b]; k < m.plan.block_start[b + 1]; ++k) {
-      const bool batchable = m.framed.find(k) < 0 && count(k) <= kShapeMemoryMaxBatchedNeighbours;
+      // Flat interior neighbourhoods (a box's corners) take their normal from a pair: scalar.
+      const bool batchable = (m.surface || m.framed.find(k) < 0) &&
+                             int(m.neighbours.row(k).size()) <= kShapeMemoryMaxBatchedNeighbours;
       (batchable ? lanes : others).push_back(k);
     }
     std::stable_sort(lanes.begin(), lanes.end(), [&](int a, int c) { return count(a) < count(c); });
@@ -189,11 +198,13 @@ double add_polar_batch_forces(const ShapeMemory& m, const std::array<int, W>& ks
   const V3 xi = gather(x, node), Xi = gather(rest, node);
   V3 sum_d{}, sum_r{}, sum_X{};
   M3 P{};
-  V3 r[kShapeMemoryMaxBatchedNeighbours];  // X_j - X_i, later the neighbours' reactions
+  V3 r[kShapeMemoryMaxBatchedNeighbours];   // X_j - X_i, later the neighbours' reactions
+  V3 dx[kShapeMemoryMaxBatchedNeighbours];  // x_j - x_i
   for (int j = 0; j < n; ++j) {
     const int id[W] = {nb[0][j], nb[1][j], nb[2][j], nb[3][j]};
     const V3 Xj = gather(rest, id);
     const V3 d = gather(x, id) - xi;
+    dx[j] = d;
     r[j] = Xj - Xi;
     sum_d = sum_d + d;
     sum_r = sum_r + r[j];
@@ -206,6 +217,29 @@ double add_polar_batch_forces(const ShapeMemory& m, const std::array<int, W>& ks
   M3 A;
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b) A.a[a][b] = P.a[a][b] - sum_d.v[a] * mean_r.v[b];
+  // Surface nodes: the normal pair, A += w N/|N| n0^T, N and n0 the current and rest normals
+  // of the ordered ring about its centroid (shape_memory.cpp's ring_normal).
+  const bool ring = m.framed.find(ks[0]) >= 0;
+  V3 unit_normal{}, rest_normal{};
+  D normal_length{}, weight{};
+  if (ring) {
+    const V3 mean_d = sum_d / count;
+    V3 N{}, N0{};
+    for (int j = 0; j + 1 < n; ++j) {
+      N = N + cross(dx[j] - mean_d, dx[j + 1] - mean_d);
+      N0 = N0 + cross(r[j] - mean_r, r[j + 1] - mean_r);
+    }
+    if (n > 2) {
+      N = N + cross(dx[n - 1] - mean_d, dx[0] - mean_d);
+      N0 = N0 + cross(r[n - 1] - mean_r, r[0] - mean_r);
+    }
+    normal_length = sqrt(dot(N, N));
+    unit_normal = N / normal_length;
+    rest_normal = N0 / sqrt(dot(N0, N0));
+    for (int l = 0; l < W; ++l) weight[l] = m.normal_weight[size_t(m.framed.find(ks[l]))];
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) A.a[a][b] += weight * unit_normal.v[a] * rest_normal.v[b];
+  }
 
   // Newton turns of the rotation, as rotation_iteration, until they settle it as
   // extract_rotation decides (below 1e-8 rad, the next turn being of its square). A lane
@@ -249,6 +283,11 @@ double add_polar_batch_forces(const ShapeMemory& m, const std::array<int, W>& ks
     for (int j = 0; j < n; ++j) {
       const V3 e = r[j] - mean_r;  // X_j - G0
       r[j] = share + times(R, cross(half_mu, e));
+    }
+    if (ring) {  // the normal pair: dE = h'.dN through the ring's cross products
+      const V3 h = times(R, cross(half_mu, rest_normal)) * weight;
+      const V3 hp = (h - unit_normal * dot(unit_normal, h)) / normal_length;
+      for (int j = 0; j < n; ++j) r[j] = r[j] + cross(dx[(j + 1) % n] - dx[(j + n - 1) % n], hp);
     }
   }
 

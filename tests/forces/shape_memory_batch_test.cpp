@@ -81,71 +81,95 @@ TEST(ShapeMemoryBatch, PlanBatchesEqualCountsWithoutNormalPairs) {
   EXPECT_GE(batched, 343 - 8 - 3 * 3);
 }
 
-TEST(ShapeMemoryBatch, AgreesWithTheScalarPathIncludingFallbacks) {
-  const Model model = block();
+// The whole batched pass against every node on the scalar path; both kinds of lanes occur.
+void expect_agreement(const Model& model, std::mt19937& rng) {
   const ShapeMemory& m = model.shape_memory[0];
-  std::mt19937 rng(11);
-  for (int trial = 0; trial < 5; ++trial) {
-    const Deformed d = deformed(model, rng);
-    // Scalar reference: every node on the scalar path, in node order.
-    std::vector<Vec3> f_scalar(d.x.size(), Vec3::Zero()), f_batch = f_scalar;
-    std::vector<Eigen::Quaterniond> q_scalar = d.rotations, q_batch = d.rotations;
-    double e_scalar = 0.0;
-    for (int k = 0; k < int(m.nodes.size()); ++k)
-      e_scalar += add_polar_node_forces(m, k, model.rest_position, d.x, q_scalar, f_scalar);
-    const double e_batch = add_shape_memory_forces(m, model.rest_position, d.x, q_batch, f_batch);
-    const double scale = largest(f_scalar);
-    ASSERT_GT(scale, 1e-3);  // N: a real deformation
-    for (size_t i = 0; i < d.x.size(); ++i)
-      EXPECT_LE((f_batch[i] - f_scalar[i]).norm(), 1e-12 * scale) << "node " << i;
-    EXPECT_NEAR(e_batch, e_scalar, 1e-12 * e_scalar);
-    for (size_t k = 0; k < q_scalar.size(); ++k)
-      EXPECT_LE((q_batch[k].coeffs() - q_scalar[k].coeffs()).norm(), 1e-12) << "node " << k;
+  const Deformed d = deformed(model, rng);
+  std::vector<Vec3> f_scalar(d.x.size(), Vec3::Zero()), f_batch = f_scalar;
+  std::vector<Eigen::Quaterniond> q_scalar = d.rotations, q_batch = d.rotations;
+  double e_scalar = 0.0;
+  for (int k = 0; k < int(m.nodes.size()); ++k)
+    e_scalar += add_polar_node_forces(m, k, model.rest_position, d.x, q_scalar, f_scalar);
+  const double e_batch = add_shape_memory_forces(m, model.rest_position, d.x, q_batch, f_batch);
+  const double scale = largest(f_scalar);
+  ASSERT_GT(scale, 1e-3);  // N: a real deformation
+  for (size_t i = 0; i < d.x.size(); ++i)
+    EXPECT_LE((f_batch[i] - f_scalar[i]).norm(), 1e-12 * scale) << "node " << i;
+  EXPECT_NEAR(e_batch, e_scalar, 1e-12 * e_scalar);
+  for (size_t k = 0; k < q_scalar.size(); ++k)
+    EXPECT_LE((q_batch[k].coeffs() - q_scalar[k].coeffs()).norm(), 1e-12) << "node " << k;
 
-    // Both kinds of lanes occurred: computed in the lanes and redone on the scalar path.
-    int in_lanes = 0, fell_back = 0;
-    std::vector<Vec3> f(d.x.size(), Vec3::Zero());
-    std::vector<Eigen::Quaterniond> q = d.rotations;
-    for (int p = 0; p < m.batched_end[0]; p += W) {
+  int in_lanes = 0, fell_back = 0;
+  std::vector<Vec3> f(d.x.size(), Vec3::Zero());
+  std::vector<Eigen::Quaterniond> q = d.rotations;
+  for (int b = 0; b < m.plan.blocks(); ++b)
+    for (int p = m.plan.block_start[b]; p < m.batched_end[b]; p += W) {
       std::array<int, W> ks;
       std::copy_n(m.batch_order.begin() + p, W, ks.begin());
       std::array<bool, W> batched;
       add_polar_batch_forces(m, ks, model.rest_position, d.x, q, f, &batched);
-      for (bool b : batched) (b ? in_lanes : fell_back) += 1;
+      for (bool lane : batched) (lane ? in_lanes : fell_back) += 1;
     }
-    EXPECT_GT(in_lanes, 200);
-    EXPECT_GT(fell_back, 20);
-  }
+  EXPECT_GT(in_lanes, 2 * fell_back);
+  EXPECT_GT(fell_back, 5);
+}
+
+TEST(ShapeMemoryBatch, AgreesWithTheScalarPathIncludingFallbacks) {
+  const Model model = block();
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 5; ++trial) expect_agreement(model, rng);
+}
+
+// Surface nodes carry the normal pair of their ordered ring: batched too.
+TEST(ShapeMemoryBatch, SurfaceNodesAgreeWithTheScalarPath) {
+  const Model model =
+      testing::single_component(make_ellipsoid_surface({0.02, 0.015, 0.01}, 3),
+                                testing::surface_material(50.0, 0.1, FrameMode::polar));
+  const ShapeMemory& m = model.shape_memory[0];
+  ASSERT_TRUE(m.surface);
+  int batched = 0;
+  for (int b = 0; b < m.plan.blocks(); ++b) batched += m.batched_end[b] - m.plan.block_start[b];
+  // Rings of 5 and 6: at most 3 of each left over per block.
+  EXPECT_GE(batched, int(m.nodes.size()) - 2 * 3 * m.plan.blocks());
+  std::mt19937 rng(13);
+  for (int trial = 0; trial < 5; ++trial) expect_agreement(model, rng);
 }
 
 TEST(ShapeMemoryBatch, ZeroForceUnderARigidRotation) {
-  const Model model = block();
-  const ShapeMemory& m = model.shape_memory[0];
-  std::mt19937 rng(5);
-  for (int trial = 0; trial < 10; ++trial) {
-    const Eigen::Matrix3d R = testing::random_rotation(rng);
-    const Vec3 t(0.1, -0.2, 0.05);
-    std::vector<Vec3> x;
-    for (const Vec3& X : model.rest_position) x.push_back(R * X + t);
-    // Warm rotations a little off the true one: the lanes turn them back.
-    std::vector<Eigen::Quaterniond> q;
-    for (size_t k = 0; k < m.nodes.size(); ++k)
-      q.push_back(Eigen::Quaterniond(R) * small_turn(rng, 1e-3));
-    std::vector<Vec3> f(x.size(), Vec3::Zero());
-    int in_lanes = 0;
-    for (int p = 0; p < m.batched_end[0]; p += W) {
-      std::array<int, W> ks;
-      std::copy_n(m.batch_order.begin() + p, W, ks.begin());
-      std::array<bool, W> batched;
-      add_polar_batch_forces(m, ks, model.rest_position, x, q, f, &batched);
-      for (bool b : batched) in_lanes += b;
-    }
-    EXPECT_EQ(in_lanes, m.batched_end[0]);
-    // K = 50 N/m on 5 mm cells: round-off forces are ~1e-16 N.
-    EXPECT_LT(largest(f), 1e-13);
-    for (int p = 0; p < m.batched_end[0]; ++p) {
-      const int k = m.batch_order[size_t(p)];
-      EXPECT_LT(q[size_t(k)].angularDistance(Eigen::Quaterniond(R)), 1e-12) << "node " << k;
+  const Model surface =
+      testing::single_component(make_ellipsoid_surface({0.02, 0.015, 0.01}, 3),
+                                testing::surface_material(50.0, 0.1, FrameMode::polar));
+  const Model volume = block();
+  for (const Model* model : {&volume, &surface}) {
+    const ShapeMemory& m = model->shape_memory[0];
+    std::mt19937 rng(5);
+    for (int trial = 0; trial < 10; ++trial) {
+      const Eigen::Matrix3d R = testing::random_rotation(rng);
+      const Vec3 t(0.1, -0.2, 0.05);
+      std::vector<Vec3> x;
+      for (const Vec3& X : model->rest_position) x.push_back(R * X + t);
+      // Warm rotations a little off the true one: the lanes turn them back.
+      std::vector<Eigen::Quaterniond> q;
+      for (size_t k = 0; k < m.nodes.size(); ++k)
+        q.push_back(Eigen::Quaterniond(R) * small_turn(rng, 1e-3));
+      std::vector<Vec3> f(x.size(), Vec3::Zero());
+      int in_lanes = 0, lanes = 0;
+      for (int b = 0; b < m.plan.blocks(); ++b)
+        for (int p = m.plan.block_start[b]; p < m.batched_end[b]; p += W) {
+          std::array<int, W> ks;
+          std::copy_n(m.batch_order.begin() + p, W, ks.begin());
+          std::array<bool, W> batched;
+          add_polar_batch_forces(m, ks, model->rest_position, x, q, f, &batched);
+          for (int l = 0; l < W; ++l) {
+            in_lanes += batched[size_t(l)], ++lanes;
+            const double angle = q[size_t(ks[size_t(l)])].angularDistance(Eigen::Quaterniond(R));
+            EXPECT_LT(angle, 1e-12) << "node " << ks[size_t(l)];
+          }
+        }
+      EXPECT_EQ(in_lanes, lanes);
+      EXPECT_GT(lanes, 300);
+      // K = 50 N/m on 5 mm cells: round-off forces are ~1e-16 N.
+      EXPECT_LT(largest(f), 1e-13);
     }
   }
 }
