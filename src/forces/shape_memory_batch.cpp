@@ -46,7 +46,7 @@ PHYMUL_LANES V3 cross(const V3& a, const V3& b) {
            a.v[0] * b.v[1] - a.v[1] * b.v[0]}};
 }
 PHYMUL_LANES D splat(double s) { return D{} + s; }
-PHYMUL_LANES D sqrt(D v) {
+PHYMUL_LANES D lane_sqrt(const D& v) {
   return D{std::sqrt(v[0]), std::sqrt(v[1]), std::sqrt(v[2]), std::sqrt(v[3])};
 }
 PHYMUL_LANES bool any(const Mask& m) { return (m[0] | m[1] | m[2] | m[3]) != 0; }
@@ -233,9 +233,9 @@ double add_polar_batch_forces(const ShapeMemory& m, const std::array<int, W>& ks
       N = N + cross(dx[n - 1] - mean_d, dx[0] - mean_d);
       N0 = N0 + cross(r[n - 1] - mean_r, r[0] - mean_r);
     }
-    normal_length = sqrt(dot(N, N));
+    normal_length = lane_sqrt(dot(N, N));
     unit_normal = N / normal_length;
-    rest_normal = N0 / sqrt(dot(N0, N0));
+    rest_normal = N0 / lane_sqrt(dot(N0, N0));
     for (int l = 0; l < W; ++l) weight[l] = m.normal_weight[size_t(m.framed.find(ks[l]))];
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) A.a[a][b] += weight * unit_normal.v[a] * rest_normal.v[b];
