@@ -4,6 +4,8 @@
 #include <omp.h>
 
 #include "cube.hpp"
+#include "phymul/prostate.hpp"
+#include "phymul/scene.hpp"
 
 namespace {
 
@@ -25,6 +27,46 @@ BENCHMARK(BM_Step)
     ->ArgsProduct({{10, 20, 30, 40}, {1}})
     ->Args({40, 2})
     ->Unit(benchmark::kMillisecond);
+// Every shape-memory node of the model on the scalar path, in node order (the kernel before
+// the batched one).
+void scalar_kernel_only(phymul::Model& model) {
+  for (phymul::ShapeMemory& m : model.shape_memory) {
+    for (size_t k = 0; k < m.batch_order.size(); ++k) m.batch_order[k] = int(k);
+    m.batched_end.assign(m.plan.block_start.begin(), m.plan.block_start.end() - 1);
+  }
+}
+
+// The same step with every shape-memory node on the scalar path, in node order (the kernel
+// before the batched one): what the batched kernel gains, measured in one binary.
+void BM_StepScalar(benchmark::State& state) {
+  omp_set_num_threads(int(state.range(1)));
+  phymul::Model model = phymul::bench::pushed_cube(int(state.range(0)));
+  scalar_kernel_only(model);
+  phymul::Simulator sim(std::move(model));
+  phymul::bench::time_steps(state, sim);
+  state.counters["threads"] = double(state.range(1));
+}
+BENCHMARK(BM_StepScalar)
+    ->Args({10, 1})
+    ->Args({40, 1})
+    ->Args({40, 2})
+    ->Unit(benchmark::kMillisecond);
+// The prostate study's 50 mL scene (pressure probe, as bench/prostate_bench.cpp, one thread)
+// with the batched kernel (range(0) = 1) or the scalar one (0): its bladder is a surface, every
+// node of which carries the ring normal's pair.
+void BM_ProstateKernel(benchmark::State& state) {
+  using namespace phymul;
+  omp_set_num_threads(1);
+  const prostate::Options options;
+  prostate::SceneSettings scene = prostate::study_scene(options, 50e-6, prostate::Probe::pressure);
+  scene.dynamic = true;
+  Model model = compile_scene(parse_scene(prostate::scene_text(options, scene), "bench.yaml"));
+  if (state.range(0) == 0) scalar_kernel_only(model);
+  Simulator sim(std::move(model));
+  while (sim.state().time < 0.3) sim.step();  // past the settling, into the probe's push
+  bench::time_steps(state, sim);
+}
+BENCHMARK(BM_ProstateKernel)->Arg(1)->Arg(0)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_StepFem)->ArgsProduct({{10, 40}, {1}})->Args({40, 2})->Unit(benchmark::kMillisecond);
 
 // Time to equilibrium: an 80 mm cube of n^3 hexahedra, volume kept, base fixed, top pushed

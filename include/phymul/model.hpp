@@ -38,6 +38,11 @@ struct ShapeMemory {
   std::vector<std::array<int, 2>> frame_pair;  // per framed node; empty on surfaces
   bool surface = false;  // neighbours are ordered rings (normal from the ring)
   ParallelPlan plan;     // memory nodes k in coloured blocks (solver/parallel_plan.hpp)
+  // Polar mode's batched kernel (forces/shape_memory_batch.cpp): the memory nodes of each
+  // block of `plan` reordered, the batched ones first (lanes of equal neighbour count, no
+  // normal pair), then the others in node order, from batched_end[block] on.
+  std::vector<int> batch_order;
+  std::vector<int> batched_end;
 };
 
 // Explicit finite elements of one component (TLED, Miller et al. 2007): total Lagrangian,

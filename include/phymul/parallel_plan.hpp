@@ -21,10 +21,11 @@ struct ParallelPlan {
 ParallelPlan plan_blocks(int items,
                          const std::function<void(int, const std::function<void(int)>&)>& writes);
 
-// Runs work(item) (which returns the item's energy, J) over every item, colour by colour,
-// the blocks of a colour in parallel; returns the energy summed in block order.
-template <class Work>
-double run_coloured(const ParallelPlan& plan, Work&& work) {
+// Runs block_work(b) (which returns the block's energy, J) over every block, colour by colour,
+// the blocks of a colour in parallel; returns the energy summed in block order. A block's
+// items are its own to order (the batched shape-memory kernel groups them).
+template <class BlockWork>
+double run_coloured_blocks(const ParallelPlan& plan, BlockWork&& block_work) {
   constexpr int kParallelFrom = 2048;  // items; below, a thread team costs more than it saves
   const int colours = int(plan.colour_start.size()) - 1;
 #pragma omp parallel if (plan.block_start.back() >= kParallelFrom)
@@ -32,15 +33,24 @@ double run_coloured(const ParallelPlan& plan, Work&& work) {
 #pragma omp for schedule(static)
     for (int index = plan.colour_start[c]; index < plan.colour_start[c + 1]; ++index) {
       const int b = plan.colour_blocks[index];
-      double energy = 0.0;
-      for (int item = plan.block_start[b]; item < plan.block_start[b + 1]; ++item)
-        energy += work(item);
-      plan.block_energy[b] = energy;
+      plan.block_energy[b] = block_work(b);
     }
   }
   double energy = 0.0;
   for (double e : plan.block_energy) energy += e;
   return energy;
+}
+
+// Runs work(item) (which returns the item's energy, J) over every item, in item order within
+// each block.
+template <class Work>
+double run_coloured(const ParallelPlan& plan, Work&& work) {
+  return run_coloured_blocks(plan, [&](int b) {
+    double energy = 0.0;
+    for (int item = plan.block_start[b]; item < plan.block_start[b + 1]; ++item)
+      energy += work(item);
+    return energy;
+  });
 }
 
 }  // namespace phymul

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "forces/shape_memory_batch.hpp"
 #include "phymul/parallel_plan.hpp"
 
 namespace phymul {
@@ -338,6 +339,7 @@ void memorise_rest_shape(ShapeMemory& m, std::span<const Vec3> rest) {
     visit(m.nodes[k]);  // a node's pass writes it and its neighbours
     for (int j : m.neighbours.row(k)) visit(j);
   });
+  plan_polar_batches(m);
 }
 
 Vec3 attraction_position(const ShapeMemory& m, int k, std::span<const Vec3> rest,
@@ -359,21 +361,49 @@ void add_centroid_reaction(std::span<const int> nb, const Vec3& fi, std::span<Ve
   for (int j : nb) f[j] -= share;
 }
 
+}  // namespace
+
+double add_polar_node_forces(const ShapeMemory& m, int k, std::span<const Vec3> rest,
+                             std::span<const Vec3> x, std::span<Eigen::Quaterniond> rotations,
+                             std::span<Vec3> f) {
+  const int i = m.nodes[k];
+  const Fit fit = fit_neighbourhood(m, k, rest, x);
+  extract_rotation(fit.A, rotations[k]);
+  const Eigen::Matrix3d R = rotations[k].toRotationMatrix();
+  const Vec3 pull = fit.g + R * fit.c - x[i];
+  f[i] += m.stiffness * pull;
+  if (m.reaction) {
+    // -dE/dx through g and through R: the forces are then exactly the energy's gradient.
+    add_centroid_reaction(m.neighbours.row(k), m.stiffness * pull, f);
+    add_rotation_reaction(m, k, rest, x, fit, R, pull, f);
+  }
+  return 0.5 * m.stiffness * pull.squaredNorm();
+}
+
+namespace {
+
+// Batches of kShapeMemoryLanes first, then the block's other nodes: the order is the model's,
+// whatever the number of threads.
 double add_polar_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::span<const Vec3> x,
                         std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f) {
-  return run_coloured(m.plan, [&](int k) {
-    const int i = m.nodes[k];
-    const Fit fit = fit_neighbourhood(m, k, rest, x);
-    extract_rotation(fit.A, rotations[k]);
-    const Eigen::Matrix3d R = rotations[k].toRotationMatrix();
-    const Vec3 pull = fit.g + R * fit.c - x[i];
-    f[i] += m.stiffness * pull;
-    if (m.reaction) {
-      // -dE/dx through g and through R: the forces are then exactly the energy's gradient.
-      add_centroid_reaction(m.neighbours.row(k), m.stiffness * pull, f);
-      add_rotation_reaction(m, k, rest, x, fit, R, pull, f);
+  // A memory whose plan changed after plan_polar_batches runs scalar, in node order.
+  const bool planned =
+      int(m.batched_end.size()) == m.plan.blocks() && m.batch_order.size() == m.nodes.size();
+  if (!planned)
+    return run_coloured(m.plan,
+                        [&](int k) { return add_polar_node_forces(m, k, rest, x, rotations, f); });
+  return run_coloured_blocks(m.plan, [&](int b) {
+    double energy = 0.0;
+    const int batched = m.batched_end[b], end = m.plan.block_start[b + 1];
+    int p = m.plan.block_start[b];
+    for (; p < batched; p += kShapeMemoryLanes) {
+      std::array<int, kShapeMemoryLanes> ks;
+      std::copy_n(m.batch_order.begin() + p, kShapeMemoryLanes, ks.begin());
+      energy += add_polar_batch_forces(m, ks, rest, x, rotations, f);
     }
-    return 0.5 * m.stiffness * pull.squaredNorm();
+    for (; p < end; ++p)
+      energy += add_polar_node_forces(m, m.batch_order[p], rest, x, rotations, f);
+    return energy;
   });
 }
 

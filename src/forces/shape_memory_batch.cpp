@@ -1,0 +1,310 @@
+#include "forces/shape_memory_batch.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace phymul {
+namespace {
+
+constexpr int W = kShapeMemoryLanes;
+static_assert(W == 4, "the gathers below spell out four lanes");
+
+// GCC/Clang vector extensions: each operation acts on the W lanes at once (one AVX
+// instruction with -march=native, two SSE2 ones without).
+using D = double __attribute__((vector_size(W * sizeof(double))));
+using Mask = long long __attribute__((vector_size(W * sizeof(long long))));
+
+// The helpers below pass lane vectors by value; they are all inlined, so the note that AVX
+// changes the calling convention of such functions does not apply.
+#pragma GCC diagnostic ignored "-Wpsabi"
+#define PHYMUL_LANES [[gnu::always_inline]] inline
+
+struct V3 {
+  D v[3];
+};
+struct M3 {
+  D a[3][3];  // [row][column]
+};
+struct Q {
+  D w, x, y, z;
+};
+
+PHYMUL_LANES V3 operator+(const V3& a, const V3& b) {
+  return {{a.v[0] + b.v[0], a.v[1] + b.v[1], a.v[2] + b.v[2]}};
+}
+PHYMUL_LANES V3 operator-(const V3& a, const V3& b) {
+  return {{a.v[0] - b.v[0], a.v[1] - b.v[1], a.v[2] - b.v[2]}};
+}
+PHYMUL_LANES V3 operator*(const V3& a, D s) { return {{a.v[0] * s, a.v[1] * s, a.v[2] * s}}; }
+PHYMUL_LANES V3 operator/(const V3& a, D s) { return {{a.v[0] / s, a.v[1] / s, a.v[2] / s}}; }
+PHYMUL_LANES D dot(const V3& a, const V3& b) {
+  return a.v[0] * b.v[0] + a.v[1] * b.v[1] + a.v[2] * b.v[2];
+}
+PHYMUL_LANES V3 cross(const V3& a, const V3& b) {
+  return {{a.v[1] * b.v[2] - a.v[2] * b.v[1], a.v[2] * b.v[0] - a.v[0] * b.v[2],
+           a.v[0] * b.v[1] - a.v[1] * b.v[0]}};
+}
+PHYMUL_LANES D splat(double s) { return D{} + s; }
+PHYMUL_LANES D lane_sqrt(const D& v) {
+  return D{std::sqrt(v[0]), std::sqrt(v[1]), std::sqrt(v[2]), std::sqrt(v[3])};
+}
+PHYMUL_LANES bool any(const Mask& m) { return (m[0] | m[1] | m[2] | m[3]) != 0; }
+
+// The W points p[id[l]].
+PHYMUL_LANES V3 gather(std::span<const Vec3> p, const int* id) {
+  const Vec3 &a = p[id[0]], &b = p[id[1]], &c = p[id[2]], &d = p[id[3]];
+  return {{D{a.x(), b.x(), c.x(), d.x()}, D{a.y(), b.y(), c.y(), d.y()},
+           D{a.z(), b.z(), c.z(), d.z()}}};
+}
+
+PHYMUL_LANES V3 times(const M3& M, const V3& u) {
+  V3 r;
+  for (int a = 0; a < 3; ++a) r.v[a] = M.a[a][0] * u.v[0] + M.a[a][1] * u.v[1] + M.a[a][2] * u.v[2];
+  return r;
+}
+PHYMUL_LANES V3 transpose_times(const M3& M, const V3& u) {
+  V3 r;
+  for (int a = 0; a < 3; ++a) r.v[a] = M.a[0][a] * u.v[0] + M.a[1][a] * u.v[1] + M.a[2][a] * u.v[2];
+  return r;
+}
+PHYMUL_LANES M3 transpose_times(const M3& R, const M3& A) {
+  M3 S;
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b)
+      S.a[a][b] = R.a[0][a] * A.a[0][b] + R.a[1][a] * A.a[1][b] + R.a[2][a] * A.a[2][b];
+  return S;
+}
+
+// Eigen's Quaternion::toRotationMatrix, lane by lane.
+PHYMUL_LANES M3 rotation_matrix(const Q& q) {
+  const D tx = 2.0 * q.x, ty = 2.0 * q.y, tz = 2.0 * q.z;
+  const D twx = tx * q.w, twy = ty * q.w, twz = tz * q.w;
+  const D txx = tx * q.x, txy = ty * q.x, txz = tz * q.x;
+  const D tyy = ty * q.y, tyz = tz * q.y, tzz = tz * q.z;
+  M3 R;
+  R.a[0][0] = 1.0 - (tyy + tzz), R.a[0][1] = txy - twz, R.a[0][2] = txz + twy;
+  R.a[1][0] = txy + twz, R.a[1][1] = 1.0 - (txx + tzz), R.a[1][2] = tyz - twx;
+  R.a[2][0] = txz - twy, R.a[2][1] = tyz + twx, R.a[2][2] = 1.0 - (txx + tyy);
+  return R;
+}
+
+// tr(S) I - sym(S) (shape_memory.cpp's rotation_hessian), its upper triangle.
+struct Sym3 {
+  D m00, m01, m02, m11, m12, m22;
+};
+PHYMUL_LANES Sym3 rotation_hessian(const M3& S) {
+  const D trace = S.a[0][0] + S.a[1][1] + S.a[2][2];
+  return {trace - S.a[0][0], -(0.5 * (S.a[0][1] + S.a[1][0])), -(0.5 * (S.a[0][2] + S.a[2][0])),
+          trace - S.a[1][1], -(0.5 * (S.a[1][2] + S.a[2][1])), trace - S.a[2][2]};
+}
+
+PHYMUL_LANES V3 axial_of_skew(const M3& S) {
+  return {{0.5 * (S.a[2][1] - S.a[1][2]), 0.5 * (S.a[0][2] - S.a[2][0]),
+           0.5 * (S.a[1][0] - S.a[0][1])}};
+}
+
+// shape_memory.cpp's solve_positive_definite: the lanes where M is safely positive definite
+// get y = M^-1 b; the mask says which.
+PHYMUL_LANES Mask solve_positive_definite(const Sym3& M, const V3& b, V3& y) {
+  const D c00 = M.m11 * M.m22 - M.m12 * M.m12;
+  const D c01 = M.m02 * M.m12 - M.m01 * M.m22;
+  const D c02 = M.m01 * M.m12 - M.m02 * M.m11;
+  const D det = M.m00 * c00 + M.m01 * c01 + M.m02 * c02;
+  const D scale = (M.m00 + M.m11 + M.m22) / 3.0;
+  const Mask ok =
+      (M.m00 > 0.0) & (M.m00 * M.m11 > M.m01 * M.m01) & (det > 1e-6 * scale * scale * scale);
+  const D c11 = M.m00 * M.m22 - M.m02 * M.m02;
+  const D c12 = M.m01 * M.m02 - M.m00 * M.m12;
+  const D c22 = M.m00 * M.m11 - M.m01 * M.m01;
+  const D inverse = 1.0 / det;
+  y = V3{{c00 * b.v[0] + c01 * b.v[1] + c02 * b.v[2], c01 * b.v[0] + c11 * b.v[1] + c12 * b.v[2],
+          c02 * b.v[0] + c12 * b.v[1] + c22 * b.v[2]}} *
+      inverse;
+  return ok;
+}
+
+// q turned by the body-frame rotation vector theta (half = theta / 2), as shape_memory.cpp's
+// turn: below 1e-4 rad by the unnormalised quaternion (1, half); above, up to 0.1 rad, by
+// (cos |half|, sin |half| half / |half|) from their Taylor series (to 1e-20 there), instead of
+// a sqrt, a division and trigonometry. Then one Newton step for 1/|q| near 1 renormalises.
+PHYMUL_LANES Q turn(const Q& q, const V3& half) {
+  const D h2 = dot(half, half);
+  const D cos_half = 1.0 - h2 / 2.0 * (1.0 - h2 / 12.0 * (1.0 - h2 / 30.0 * (1.0 - h2 / 56.0)));
+  const D sinc_half = 1.0 - h2 / 6.0 * (1.0 - h2 / 20.0 * (1.0 - h2 / 42.0 * (1.0 - h2 / 72.0)));
+  const Mask small = 4.0 * h2 < 1e-8;
+  const D rw = small ? splat(1.0) : cos_half, scale = small ? splat(1.0) : sinc_half;
+  const D hx = half.v[0] * scale, hy = half.v[1] * scale, hz = half.v[2] * scale;
+  Q t{q.w * rw - (q.x * hx + q.y * hy + q.z * hz), q.w * hx + q.x * rw + (q.y * hz - q.z * hy),
+      q.w * hy + q.y * rw + (q.z * hx - q.x * hz), q.w * hz + q.z * rw + (q.x * hy - q.y * hx)};
+  const D s = 1.5 - 0.5 * (t.w * t.w + t.x * t.x + t.y * t.y + t.z * t.z);
+  return {t.w * s, t.x * s, t.y * s, t.z * s};
+}
+
+}  // namespace
+
+void plan_polar_batches(ShapeMemory& m) {
+  m.batch_order.clear();
+  m.batched_end.clear();
+  if (m.frame != FrameMode::polar) {
+    m.batch_order.shrink_to_fit();
+    m.batched_end.shrink_to_fit();
+    return;
+  }
+  m.batch_order.reserve(m.nodes.size());
+  m.batched_end.reserve(size_t(m.plan.blocks()));
+  std::vector<int> lanes, others;
+  // Lanes share their neighbour count and whether they carry the normal pair.
+  auto count = [&m](int k) {
+    return 2 * int(m.neighbours.row(k).size()) + (m.framed.find(k) >= 0 ? 1 : 0);
+  };
+  for (int b = 0; b < m.plan.blocks(); ++b) {
+    lanes.clear();
+    others.clear();
+    for (int k = m.plan.block_start[b]; k < m.plan.block_start[b + 1]; ++k) {
+      // Flat interior neighbourhoods (a box's corners) take their normal from a pair: scalar.
+      const bool batchable = (m.surface || m.framed.find(k) < 0) &&
+                             int(m.neighbours.row(k).size()) <= kShapeMemoryMaxBatchedNeighbours;
+      (batchable ? lanes : others).push_back(k);
+    }
+    std::stable_sort(lanes.begin(), lanes.end(), [&](int a, int c) { return count(a) < count(c); });
+    for (size_t s = 0; s < lanes.size();) {
+      size_t e = s;
+      while (e < lanes.size() && count(lanes[e]) == count(lanes[s])) ++e;
+      const size_t full = s + (e - s) / W * W;
+      m.batch_order.insert(m.batch_order.end(), lanes.begin() + long(s),
+                           lanes.begin() + long(full));
+      others.insert(others.end(), lanes.begin() + long(full), lanes.begin() + long(e));
+      s = e;
+    }
+    m.batched_end.push_back(int(m.batch_order.size()));
+    std::sort(others.begin(), others.end());
+    m.batch_order.insert(m.batch_order.end(), others.begin(), others.end());
+  }
+}
+
+double add_polar_batch_forces(const ShapeMemory& m, const std::array<int, W>& ks,
+                              std::span<const Vec3> rest, std::span<const Vec3> x,
+                              std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f,
+                              std::array<bool, W>* batched) {
+  const int n = int(m.neighbours.row(ks[0]).size());
+  int node[W];
+  const int* nb[W];
+  for (int l = 0; l < W; ++l) {
+    node[l] = m.nodes[ks[l]];
+    nb[l] = m.neighbours.row(ks[l]).data();
+  }
+  // The fit, as fit_neighbourhood: about the node itself, in one pass.
+  const V3 xi = gather(x, node), Xi = gather(rest, node);
+  V3 sum_d{}, sum_r{}, sum_X{};
+  M3 P{};
+  V3 r[kShapeMemoryMaxBatchedNeighbours];   // X_j - X_i, later the neighbours' reactions
+  V3 dx[kShapeMemoryMaxBatchedNeighbours];  // x_j - x_i
+  for (int j = 0; j < n; ++j) {
+    const int id[W] = {nb[0][j], nb[1][j], nb[2][j], nb[3][j]};
+    const V3 Xj = gather(rest, id);
+    const V3 d = gather(x, id) - xi;
+    dx[j] = d;
+    r[j] = Xj - Xi;
+    sum_d = sum_d + d;
+    sum_r = sum_r + r[j];
+    sum_X = sum_X + Xj;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) P.a[a][b] += d.v[a] * r[j].v[b];
+  }
+  const D count = splat(double(n));
+  const V3 g = xi + sum_d / count, mean_r = sum_r / count, c = Xi - sum_X / count;
+  M3 A;
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) A.a[a][b] = P.a[a][b] - sum_d.v[a] * mean_r.v[b];
+  // Surface nodes: the normal pair, A += w N/|N| n0^T, N and n0 the current and rest normals
+  // of the ordered ring about its centroid (shape_memory.cpp's ring_normal).
+  const bool ring = m.framed.find(ks[0]) >= 0;
+  V3 unit_normal{}, rest_normal{};
+  D normal_length{}, weight{};
+  if (ring) {
+    const V3 mean_d = sum_d / count;
+    V3 N{}, N0{};
+    for (int j = 0; j + 1 < n; ++j) {
+      N = N + cross(dx[j] - mean_d, dx[j + 1] - mean_d);
+      N0 = N0 + cross(r[j] - mean_r, r[j + 1] - mean_r);
+    }
+    if (n > 2) {
+      N = N + cross(dx[n - 1] - mean_d, dx[0] - mean_d);
+      N0 = N0 + cross(r[n - 1] - mean_r, r[0] - mean_r);
+    }
+    normal_length = lane_sqrt(dot(N, N));
+    unit_normal = N / normal_length;
+    rest_normal = N0 / lane_sqrt(dot(N0, N0));
+    for (int l = 0; l < W; ++l) weight[l] = m.normal_weight[size_t(m.framed.find(ks[l]))];
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) A.a[a][b] += weight * unit_normal.v[a] * rest_normal.v[b];
+  }
+
+  // Newton turns of the rotation, as rotation_iteration, until they settle it as
+  // extract_rotation decides (below 1e-8 rad, the next turn being of its square). A lane
+  // that needs a turn of the linear fallback or of 0.1 rad or more, or more than kMaxTurns
+  // turns, redoes its node on the scalar path.
+  constexpr int kMaxTurns = 6;
+  Q q{D{rotations[ks[0]].w(), rotations[ks[1]].w(), rotations[ks[2]].w(), rotations[ks[3]].w()},
+      D{rotations[ks[0]].x(), rotations[ks[1]].x(), rotations[ks[2]].x(), rotations[ks[3]].x()},
+      D{rotations[ks[0]].y(), rotations[ks[1]].y(), rotations[ks[2]].y(), rotations[ks[3]].y()},
+      D{rotations[ks[0]].z(), rotations[ks[1]].z(), rotations[ks[2]].z(), rotations[ks[3]].z()}};
+  Mask active = Mask{} == 0, failed = Mask{};
+  for (int it = 0; it < kMaxTurns && any(active); ++it) {
+    const M3 S = transpose_times(rotation_matrix(q), A);
+    V3 half;  // of the turn theta = 2 H^-1 axial(skew(S))
+    const Mask newton = solve_positive_definite(rotation_hessian(S), axial_of_skew(S), half);
+    const V3 theta = half * splat(2.0);
+    const D angle2 = dot(theta, theta);
+    const Mask bad = active & ~(newton & (angle2 < 1e-2));
+    failed |= bad;
+    active &= ~bad;
+    const Mask move = active & (angle2 != 0.0);  // a zero turn leaves q as it is
+    const Q turned = turn(q, half);
+    q = Q{move ? turned.w : q.w, move ? turned.x : q.x, move ? turned.y : q.y,
+          move ? turned.z : q.z};
+    active &= ~(angle2 < 1e-16);
+  }
+  Mask ok = ~(failed | active);
+  const M3 R = rotation_matrix(q);
+
+  const D stiffness = splat(m.stiffness);
+  const V3 pull = g + times(R, c) - xi;
+  const V3 fi = pull * stiffness;
+  const D energy = 0.5 * stiffness * dot(pull, pull);
+  if (m.reaction) {
+    // add_centroid_reaction and add_rotation_reaction: neighbour j gets
+    // -(f_i / n + R (mu x (X_j - G0)) / 2), mu = 2 H^-1 K (c x R^T pull).
+    V3 half_mu;
+    ok &= solve_positive_definite(rotation_hessian(transpose_times(R, A)),
+                                  cross(c, transpose_times(R, pull)) * stiffness, half_mu);
+    const V3 share = fi / count;
+    for (int j = 0; j < n; ++j) {
+      const V3 e = r[j] - mean_r;  // X_j - G0
+      r[j] = share + times(R, cross(half_mu, e));
+    }
+    if (ring) {  // the normal pair: dE = h'.dN through the ring's cross products
+      const V3 h = times(R, cross(half_mu, rest_normal)) * weight;
+      const V3 hp = (h - unit_normal * dot(unit_normal, h)) / normal_length;
+      for (int j = 0; j < n; ++j) r[j] = r[j] + cross(dx[(j + 1) % n] - dx[(j + n - 1) % n], hp);
+    }
+  }
+
+  double total = 0.0;
+  for (int l = 0; l < W; ++l) {
+    if (batched) (*batched)[l] = ok[l] != 0;
+    if (!ok[l]) {
+      total += add_polar_node_forces(m, ks[l], rest, x, rotations, f);
+      continue;
+    }
+    rotations[ks[l]] = Eigen::Quaterniond(q.w[l], q.x[l], q.y[l], q.z[l]);
+    f[node[l]] += Vec3(fi.v[0][l], fi.v[1][l], fi.v[2][l]);
+    if (m.reaction)
+      for (int j = 0; j < n; ++j) f[nb[l][j]] -= Vec3(r[j].v[0][l], r[j].v[1][l], r[j].v[2][l]);
+    total += energy[l];
+  }
+  return total;
+}
+
+}  // namespace phymul

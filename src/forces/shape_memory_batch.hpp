@@ -1,0 +1,35 @@
+// The polar shape-memory pass, batched: kShapeMemoryLanes memory nodes of equal neighbour
+// count at a time, their fit, warm Newton rotation turn, pull and exact reaction computed in
+// vector lanes (structure of arrays). A lane whose single Newton turn would not settle the
+// rotation redoes its node on the scalar path (add_polar_node_forces).
+#pragma once
+
+#include <array>
+#include <span>
+
+#include "phymul/model.hpp"
+
+namespace phymul {
+
+inline constexpr int kShapeMemoryLanes = 4;
+// Neighbour counts above this go the scalar way (tetrahedral meshes reach about 20).
+inline constexpr int kShapeMemoryMaxBatchedNeighbours = 32;
+
+// Fills m.batch_order and m.batched_end from m.plan (polar mode; frame mode keeps them empty
+// and every node scalar).
+void plan_polar_batches(ShapeMemory& m);
+
+// The scalar pass of memory node k: adds its forces (N) to f, returns its energy (J).
+double add_polar_node_forces(const ShapeMemory& m, int k, std::span<const Vec3> rest,
+                             std::span<const Vec3> x, std::span<Eigen::Quaterniond> rotations,
+                             std::span<Vec3> f);
+
+// The pass of the memory nodes ks (no normal pair, equal neighbour counts), lane by lane in
+// their order as far as the forces are concerned; returns their energy. batched[l]: lane l
+// was computed in the lanes (false: it fell back to the scalar path).
+double add_polar_batch_forces(const ShapeMemory& m, const std::array<int, kShapeMemoryLanes>& ks,
+                              std::span<const Vec3> rest, std::span<const Vec3> x,
+                              std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f,
+                              std::array<bool, kShapeMemoryLanes>* batched = nullptr);
+
+}  // namespace phymul

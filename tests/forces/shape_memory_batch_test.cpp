@@ -1,0 +1,178 @@
+#include "forces/shape_memory_batch.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "forces/shape_memory.hpp"
+#include "support/models.hpp"
+
+namespace phymul {
+namespace {
+
+constexpr int W = kShapeMemoryLanes;
+
+// A 3 cm block of 6^3 hexahedra, K = 50 N/m.
+Model block() {
+  return testing::single_component(make_box(Vec3(0.03, 0.03, 0.03), {6, 6, 6}, CellType::hexa),
+                                   testing::material(50.0));
+}
+
+Eigen::Quaterniond small_turn(std::mt19937& rng, double angle) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  const Vec3 axis = Vec3(n(rng), n(rng), n(rng)).normalized();
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis));
+}
+
+// The block turned by a random rotation, bent and shaken (0.5 mm noise on 5 mm cells), with
+// rotations that start converged but for a small turn (the lanes' case) or from the identity,
+// far from the node's best fit (the scalar fallback's case).
+struct Deformed {
+  std::vector<Vec3> x;
+  std::vector<Eigen::Quaterniond> rotations;
+};
+
+Deformed deformed(const Model& model, std::mt19937& rng) {
+  const ShapeMemory& m = model.shape_memory[0];
+  const Eigen::Matrix3d R = testing::random_rotation(rng);
+  std::uniform_real_distribution<double> noise(-5e-4, 5e-4);
+  Deformed d;
+  for (const Vec3& X : model.rest_position) {
+    const Vec3 bent(X.x() + 4.0 * X.z() * X.z(), X.y() * (1.0 + 5.0 * X.x()), 0.9 * X.z());
+    d.x.push_back(R * bent + Vec3(noise(rng), noise(rng), noise(rng)));
+  }
+  std::uniform_int_distribution<int> cold(0, 4);
+  for (int k = 0; k < int(m.nodes.size()); ++k) {
+    Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+    attraction_position(m, k, model.rest_position, d.x, q);  // converged
+    d.rotations.push_back(cold(rng) == 0 ? Eigen::Quaterniond::Identity()
+                                         : q * small_turn(rng, 0.02));
+  }
+  return d;
+}
+
+double largest(std::span<const Vec3> f) {
+  double m = 0.0;
+  for (const Vec3& v : f) m = std::max(m, v.norm());
+  return m;
+}
+
+TEST(ShapeMemoryBatch, PlanBatchesEqualCountsWithoutNormalPairs) {
+  const Model model = block();
+  const ShapeMemory& m = model.shape_memory[0];
+  ASSERT_EQ(m.batch_order.size(), m.nodes.size());
+  ASSERT_EQ(int(m.batched_end.size()), m.plan.blocks());
+  int batched = 0;
+  for (int b = 0; b < m.plan.blocks(); ++b) {
+    const int start = m.plan.block_start[b], end = m.plan.block_start[b + 1];
+    std::vector<int> block(m.batch_order.begin() + start, m.batch_order.begin() + end);
+    std::sort(block.begin(), block.end());
+    for (int k = start; k < end; ++k) EXPECT_EQ(block[size_t(k - start)], k);  // a permutation
+    ASSERT_EQ((m.batched_end[b] - start) % W, 0);
+    for (int p = start; p < m.batched_end[b]; p += W)
+      for (int l = 0; l < W; ++l) {
+        const int k = m.batch_order[size_t(p + l)];
+        EXPECT_LT(m.framed.find(k), 0) << "node " << k << " has a normal pair";
+        EXPECT_EQ(m.neighbours.row(k).size(), m.neighbours.row(m.batch_order[size_t(p)]).size());
+      }
+    batched += m.batched_end[b] - start;
+  }
+  // 7^3 nodes: the 8 corners carry the normal pair; at most 3 a neighbour count are left over.
+  EXPECT_GE(batched, 343 - 8 - 3 * 3);
+}
+
+// The whole batched pass against every node on the scalar path; both kinds of lanes occur.
+void expect_agreement(const Model& model, std::mt19937& rng) {
+  const ShapeMemory& m = model.shape_memory[0];
+  const Deformed d = deformed(model, rng);
+  std::vector<Vec3> f_scalar(d.x.size(), Vec3::Zero()), f_batch = f_scalar;
+  std::vector<Eigen::Quaterniond> q_scalar = d.rotations, q_batch = d.rotations;
+  double e_scalar = 0.0;
+  for (int k = 0; k < int(m.nodes.size()); ++k)
+    e_scalar += add_polar_node_forces(m, k, model.rest_position, d.x, q_scalar, f_scalar);
+  const double e_batch = add_shape_memory_forces(m, model.rest_position, d.x, q_batch, f_batch);
+  const double scale = largest(f_scalar);
+  ASSERT_GT(scale, 1e-3);  // N: a real deformation
+  for (size_t i = 0; i < d.x.size(); ++i)
+    EXPECT_LE((f_batch[i] - f_scalar[i]).norm(), 1e-12 * scale) << "node " << i;
+  EXPECT_NEAR(e_batch, e_scalar, 1e-12 * e_scalar);
+  for (size_t k = 0; k < q_scalar.size(); ++k)
+    EXPECT_LE((q_batch[k].coeffs() - q_scalar[k].coeffs()).norm(), 1e-12) << "node " << k;
+
+  int in_lanes = 0, fell_back = 0;
+  std::vector<Vec3> f(d.x.size(), Vec3::Zero());
+  std::vector<Eigen::Quaterniond> q = d.rotations;
+  for (int b = 0; b < m.plan.blocks(); ++b)
+    for (int p = m.plan.block_start[b]; p < m.batched_end[b]; p += W) {
+      std::array<int, W> ks;
+      std::copy_n(m.batch_order.begin() + p, W, ks.begin());
+      std::array<bool, W> batched;
+      add_polar_batch_forces(m, ks, model.rest_position, d.x, q, f, &batched);
+      for (bool lane : batched) (lane ? in_lanes : fell_back) += 1;
+    }
+  EXPECT_GT(in_lanes, 2 * fell_back);
+  EXPECT_GT(fell_back, 5);
+}
+
+TEST(ShapeMemoryBatch, AgreesWithTheScalarPathIncludingFallbacks) {
+  const Model model = block();
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 5; ++trial) expect_agreement(model, rng);
+}
+
+// Surface nodes carry the normal pair of their ordered ring: batched too.
+TEST(ShapeMemoryBatch, SurfaceNodesAgreeWithTheScalarPath) {
+  const Model model =
+      testing::single_component(make_ellipsoid_surface({0.02, 0.015, 0.01}, 3),
+                                testing::surface_material(50.0, 0.1, FrameMode::polar));
+  const ShapeMemory& m = model.shape_memory[0];
+  ASSERT_TRUE(m.surface);
+  int batched = 0;
+  for (int b = 0; b < m.plan.blocks(); ++b) batched += m.batched_end[b] - m.plan.block_start[b];
+  // Rings of 5 and 6: at most 3 of each left over per block.
+  EXPECT_GE(batched, int(m.nodes.size()) - 2 * 3 * m.plan.blocks());
+  std::mt19937 rng(13);
+  for (int trial = 0; trial < 5; ++trial) expect_agreement(model, rng);
+}
+
+TEST(ShapeMemoryBatch, ZeroForceUnderARigidRotation) {
+  const Model surface =
+      testing::single_component(make_ellipsoid_surface({0.02, 0.015, 0.01}, 3),
+                                testing::surface_material(50.0, 0.1, FrameMode::polar));
+  const Model volume = block();
+  for (const Model* model : {&volume, &surface}) {
+    const ShapeMemory& m = model->shape_memory[0];
+    std::mt19937 rng(5);
+    for (int trial = 0; trial < 10; ++trial) {
+      const Eigen::Matrix3d R = testing::random_rotation(rng);
+      const Vec3 t(0.1, -0.2, 0.05);
+      std::vector<Vec3> x;
+      for (const Vec3& X : model->rest_position) x.push_back(R * X + t);
+      // Warm rotations a little off the true one: the lanes turn them back.
+      std::vector<Eigen::Quaterniond> q;
+      for (size_t k = 0; k < m.nodes.size(); ++k)
+        q.push_back(Eigen::Quaterniond(R) * small_turn(rng, 1e-3));
+      std::vector<Vec3> f(x.size(), Vec3::Zero());
+      int in_lanes = 0, lanes = 0;
+      for (int b = 0; b < m.plan.blocks(); ++b)
+        for (int p = m.plan.block_start[b]; p < m.batched_end[b]; p += W) {
+          std::array<int, W> ks;
+          std::copy_n(m.batch_order.begin() + p, W, ks.begin());
+          std::array<bool, W> batched;
+          add_polar_batch_forces(m, ks, model->rest_position, x, q, f, &batched);
+          for (int l = 0; l < W; ++l) {
+            in_lanes += batched[size_t(l)], ++lanes;
+            const double angle = q[size_t(ks[size_t(l)])].angularDistance(Eigen::Quaterniond(R));
+            EXPECT_LT(angle, 1e-12) << "node " << ks[size_t(l)];
+          }
+        }
+      EXPECT_EQ(in_lanes, lanes);
+      EXPECT_GT(lanes, 300);
+      // K = 50 N/m on 5 mm cells: round-off forces are ~1e-16 N.
+      EXPECT_LT(largest(f), 1e-13);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace phymul
