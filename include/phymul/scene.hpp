@@ -45,6 +45,9 @@ enum class Relaxation { fire, kinetic, viscous };
 struct SimulationSpec {
   std::optional<double> dt;  // s; nullopt = "auto"
   double dt_safety = 0.5;    // fraction of the stability limit used by dt: auto
+  // s, dynamics: nodes whose stability limit is below this get the inertia that lifts it to
+  // this (mass scaling; gravity keeps the true masses). nullopt: none.
+  std::optional<double> mass_scaling_dt;
   double duration = 1.0;     // s (static: the schedules are evaluated at its end)
   Integrator integrator = Integrator::verlet;
   SolveMode mode = SolveMode::dynamic;
