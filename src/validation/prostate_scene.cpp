@@ -40,11 +40,18 @@ std::string neck_stitch(const Options& o, double bladder_r) {
       "    nodes: {{sphere: {{center: {}, radius: {}}}}}\n"
       "    with: prostate\n"
       "    tolerance: {}\n",
-      vec_mm(top), mm(2.0 * bladder_r * std::sin(0.75 * ring)),
-      mm(o.stitch_tolerance));
+      vec_mm(top), mm(2.0 * bladder_r * std::sin(0.75 * ring)), mm(o.stitch_tolerance));
 }
 
 }  // namespace
+
+Options coarse_bladder(Options o) {
+  o.bladder_subdivisions = 2;
+  o.neck = Neck::bladder;
+  o.stitch_tolerance = 0.008;
+  o.mass_scaling_dt = 250e-6;
+  return o;
+}
 
 const char* probe_name(Probe probe) { return probe == Probe::pressure ? "pressure" : "rigid"; }
 

@@ -32,8 +32,7 @@ TEST(MassScaling, LiftsTheLightNodesToTheTargetStep) {
   const double limit = stable_time_step(plain.model());
   EXPECT_EQ(plain.added_inertia(), 0.0);
   const double target = 1.5 * limit;
-  const Simulator scaled =
-      hanging_block(fmt::format(", mass_scaling_dt: {:.17g} s", target));
+  const Simulator scaled = hanging_block(fmt::format(", mass_scaling_dt: {:.17g} s", target));
   const Model& model = scaled.model();
   const std::vector<double> row = stiffness_row_sums(model);
   int lifted = 0;
@@ -74,19 +73,19 @@ TEST(MassScaling, KeepsTheEquilibrium) {
     sag = std::max(sag, (plain.state().x[i] - plain.model().rest_position[i]).norm());
     apart = std::max(apart, (plain.state().x[i] - scaled.state().x[i]).norm());
   }
-  EXPECT_GT(sag, 1e-3);          // it hangs visibly
+  EXPECT_GT(sag, 1e-3);  // it hangs visibly
   EXPECT_LT(apart, 1e-6 * sag);
 }
 
 TEST(MassScaling, IsOnlyForDynamics) {
   // Static relaxation has its own fictitious masses; the key leaves them alone.
-  const Model model = compile_scene(parse_scene(
-      "simulation: {mode: static, mass_scaling_dt: 1 s}\n"
-      "objects:\n"
-      "  - name: block\n"
-      "    mesh: {generator: box, size: [40 mm, 30 mm, 20 mm], cells: [4, 3, 2]}\n"
-      "    material: {stiffness: 30 N/m, density: 1000 kg/m^3}\n",
-      "static.yaml"));
+  const Model model = compile_scene(
+      parse_scene("simulation: {mode: static, mass_scaling_dt: 1 s}\n"
+                  "objects:\n"
+                  "  - name: block\n"
+                  "    mesh: {generator: box, size: [40 mm, 30 mm, 20 mm], cells: [4, 3, 2]}\n"
+                  "    material: {stiffness: 30 N/m, density: 1000 kg/m^3}\n",
+                  "static.yaml"));
   const Simulator sim(model);
   EXPECT_NEAR(sim.dt(), 0.5 * stable_time_step(model), 1e-15);
 }
