@@ -45,9 +45,6 @@ enum class Relaxation { fire, kinetic, viscous };
 struct SimulationSpec {
   std::optional<double> dt;  // s; nullopt = "auto"
   double dt_safety = 0.5;    // fraction of the stability limit used by dt: auto
-  // s, dynamics: nodes whose stability limit is below this get the inertia that lifts it to
-  // this (mass scaling; gravity keeps the true masses). nullopt: none.
-  std::optional<double> mass_scaling_dt;
   double duration = 1.0;     // s (static: the schedules are evaluated at its end)
   Integrator integrator = Integrator::verlet;
   SolveMode mode = SolveMode::dynamic;
@@ -58,6 +55,9 @@ struct SimulationSpec {
   int load_steps = 1;             // static mode: equilibria at duration * k / load_steps
   Relaxation relaxation = Relaxation::kinetic;  // static mode: how energy is taken out
   bool relaxation_mass_scaling = true;          // static mode: fictitious masses (Simulator)
+  // s, dynamics: nodes whose stability limit is below this get the inertia that lifts it to
+  // this (mass scaling; gravity keeps the true masses). nullopt: none.
+  std::optional<double> mass_scaling_dt;
   SourceLoc loc;
 };
 
