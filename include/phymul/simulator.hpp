@@ -59,6 +59,8 @@ class Simulator {
   const State& state() const { return state_; }
   State& state() { return state_; }
   double dt() const { return dt_; }
+  // s: the stability estimate dt: auto takes its share of (after any mass scaling).
+  double stable_dt() const { return stable_dt_; }
   void set_dt(double dt) { dt_ = dt; }  // s
 
   // One explicit step of dt with the scene's integrator; loads at the new time. An unstable
@@ -127,6 +129,7 @@ class Simulator {
   Model model_;
   State state_;
   double dt_ = 0.0;
+  double stable_dt_ = 0.0;
   double load_time_ = 0.0;  // time at which State::f was evaluated
   StaticProgress static_progress_;
   // Sized once: no allocation in a step. Memory is the limit on large models (README), so

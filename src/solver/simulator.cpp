@@ -76,6 +76,7 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
     scale_masses_to(*model_.settings.mass_scaling_dt);
     if (!inertia_.empty()) stable = stable_time_step(model_, inertia_);
   }
+  stable_dt_ = stable;
   dt_ = model_.settings.dt ? *model_.settings.dt : model_.settings.dt_safety * stable;
   if (!std::isfinite(dt_)) dt_ = 1e-3;  // no stiffness at all: any step is stable
   apply_position_constraints(model_, state_.x, 0.0, f_start_);  // free between steps
@@ -282,7 +283,7 @@ void Simulator::check_stability() const {
                     "is {:.3g} s: set simulation.dt smaller (or 'auto' with dt_safety below "
                     "0.5), add damping, or check the stiffness and masses.",
                     s.time, s.step, i, c >= 0 ? model_.components[c].name : "?", what, dt_,
-                    stable_time_step(model_)),
+                    stable_dt_),
         i, s.time);
   };
   const int n = model_.node_count();

@@ -54,6 +54,9 @@ TEST(MassScaling, LiftsTheLightNodesToTheTargetStep) {
     omega2 = std::max(omega2, row[size_t(i)] / scaled.inertia()[size_t(i)]);
   EXPECT_NEAR(2.0 / std::sqrt(omega2), target, 1e-12 * target);
   EXPECT_NEAR(scaled.dt(), 0.5 * stable_time_step(model, scaled.inertia()), 1e-15);
+  // What run reports and `phymul check` prints: the estimate the step was taken from.
+  EXPECT_EQ(scaled.stable_dt(), stable_time_step(model, scaled.inertia()));
+  EXPECT_EQ(plain.stable_dt(), limit);
   EXPECT_GT(scaled.dt(), 1.4 * plain.dt());
   double added = 0.0;
   for (int i = 0; i < model.node_count(); ++i)
