@@ -33,4 +33,4 @@ echo "and the Truth Cube study in $results/truthcube/: truthcube_errors.png (err
 echo "layer), truthcube_lsm_18.25pct.png, truthcube.json, beads.csv, *.vtu"
 echo "and the prostate study in $results/prostate/: prostate_deformation.png (deformation,"
 echo "centre displacement and probe force against filling), prostate_empty.png, prostate_full.png,"
-echo "prostate.json, one scene (.yaml) and .pvd series per filling and probe, real_time/report.json"
+echo "prostate.json, one scene (.yaml) and .pvd series per filling and probe, real_time/<run>/report.json"

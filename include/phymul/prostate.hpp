@@ -14,6 +14,13 @@ namespace phymul::prostate {
 enum class Probe { pressure, rigid };
 const char* probe_name(Probe probe);
 
+// Which organ's nodes choose the stitches of the bladder neck: each takes the nearest node
+// of the other organ, so the coarser organ chooses (two nodes may not take one partner).
+enum class Neck {
+  bladder,   // the bladder's bottom node and the ring of its neighbours
+  prostate,  // the prostate's base nodes within stitch_radius of its axis
+};
+
 // Every quantity in SI; README "The prostate study" gives the source of each default.
 struct Options {
   std::vector<double> fillings{50e-6, 100e-6, 200e-6, 300e-6, 400e-6};  // m^3 of urine
@@ -33,21 +40,34 @@ struct Options {
   double urine_density = 1015.0;      // kg/m^3
   double bladder_stiffness = 5700.0;  // N/m, shape memory K of the wall
   int bladder_subdivisions = 3;       // of the icosahedron: 642 nodes
-  double stitch_radius = 0.008;       // m: prostate base nodes this close to its axis are stitched
-  double stitch_tolerance = 0.006;    // m: ... to their nearest bladder node within this
+  Neck neck = Neck::prostate;
+  double stitch_radius = 0.008;     // m, Neck::prostate: base nodes this close to its axis
+  double stitch_tolerance = 0.006;  // m: each stitched node's partner lies within this
   // Probe under the prostate, along y (the rectum's direction in this simplified frame).
   double probe_radius = 0.010;  // m, a transrectal probe is about 2 cm across
   double probe_force = 2.0;     // N, pressure probe: the force its pressure adds up to
   double probe_indent = 0.005;  // m: it presses the faces within a probe sunk this deep
   double probe_lift = 0.004;    // m, rigid probe: how far it rises after touching
   double gravity = 9.81;        // m/s^2, along -z
-  double damping = 20.0;        // 1/s (dynamic pictures only)
-  double tolerance = 1e-6;      // N, static equilibrium: largest residual nodal force
+  double damping = 20.0;        // 1/s (dynamic scenes only)
+  // Dynamic scenes: dt = this share of the Gershgorin stability limit (README "The prostate
+  // study": the scene's true highest frequency keeps omega dt well below 2 at this share).
+  double dt_safety = 0.9;
+  // s, dynamic scenes: mass scaling lifts the light nodes' stability limit to this (0: none).
+  double mass_scaling_dt = 0.0;
+  double tolerance = 1e-6;  // N, static equilibrium: largest residual nodal force
   // N, the same with the rigid probe, whose contact slows the relaxation's last digits
   // (README "The prostate study"); at K = 640 N/m 0.1 mN moves a node by about 0.16 um.
   double contact_tolerance = 1e-4;
   int load_steps = 4;  // the probe's load in this many equilibria
 };
+
+// The study on the coarse bladder that runs faster than real time on one core (README "The
+// prostate study"): icosphere 2 (162 nodes), so the neck's six stitches are chosen by the
+// bladder, within 8 mm; the prostate grid's 8 corner nodes mass-scaled to a 250 us limit
+// (+0.75 % of its mass). Its results differ from the fine bladder's by more than the
+// filling's effect (README, mesh table).
+Options coarse_bladder(Options options);
 
 // What one scene of the study is: a filling, a probe and how the scene is run.
 struct SceneSettings {
@@ -88,11 +108,26 @@ struct Frame {
 };
 using Frames = std::vector<Frame>;
 
+// One of the study's scenes run in explicit dynamics on one thread, timed against the clock.
+struct RealTimeRun {
+  double filling = 0.0;  // m^3
+  Probe probe = Probe::pressure;
+  long steps = 0;
+  double dt = 0.0;                // s
+  double wall_time = 0.0;         // s, output included
+  double real_time_factor = 0.0;  // steps x dt / wall time
+  // steps x dt / the process's CPU time: what a step costs on one core when a busy machine
+  // shares it (wall time then counts the waits too)
+  double cpu_real_time_factor = 0.0;
+  double added_mass_pct = 0.0;  // mass scaling's added inertia, % of the model's mass
+};
+
 struct Study {
   Options options;
   std::vector<FillingResult> results;  // fillings in order, each probe in turn
   double wall_time = 0.0;              // s
-  double real_time_factor = 0.0;       // of the timed dynamic run; 0: not run
+  std::vector<RealTimeRun> real_time;  // the dynamic runs; empty: not run
+  double real_time_factor = 0.0;       // the smallest of theirs; 0: not run
 };
 
 // The static scene the study runs for this filling and probe (the rigid probe still out of
@@ -101,6 +136,9 @@ SceneSettings study_scene(const Options& options, double filling, Probe probe);
 // Equilibrium under gravity, then under the probe in load steps. With an output directory,
 // writes there the scene (<name>.yaml) and every equilibrium (<name>.pvd and its .vtu files,
 // "probe_displacement" from the first), name = run_name.
+// The same in explicit dynamics (`phymul prostate --scenes`, the real-time runs): the rigid
+// probe placed against the prostate's equilibrium under gravity (one static relaxation).
+SceneSettings dynamic_scene(const Options& options, double filling, Probe probe);
 FillingResult run_filling(const Options& options, double filling, Probe probe,
                           const std::filesystem::path& out = {});
 std::string run_name(double filling, Probe probe);  // "50mL_pressure"

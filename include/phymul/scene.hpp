@@ -60,6 +60,9 @@ struct SimulationSpec {
   bool relaxation_mass_scaling = true;             // static mode: fictitious masses (Simulator)
   StaticSolver solver = StaticSolver::relaxation;  // static mode
   SourceLoc solver_loc;                            // of `solver`; line 0 when absent
+  // s, dynamics: nodes whose stability limit is below this get the inertia that lifts it to
+  // this (mass scaling; gravity keeps the true masses). nullopt: none.
+  std::optional<double> mass_scaling_dt;
   SourceLoc loc;
 };
 

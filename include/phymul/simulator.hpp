@@ -29,6 +29,8 @@ class InstabilityError : public std::runtime_error {
 // bound on the shape-memory stiffness over the node masses (undamped central difference
 // limit 2/omega_max).
 double stable_time_step(const Model& model);
+// The same with these node inertias (kg) in place of the masses (mass scaling).
+double stable_time_step(const Model& model, const std::vector<double>& inertia);
 // Per node, the Gershgorin row sum (N/m) of the shape-memory stiffness behind that bound.
 std::vector<double> stiffness_row_sums(const Model& model);
 
@@ -57,6 +59,8 @@ class Simulator {
   const State& state() const { return state_; }
   State& state() { return state_; }
   double dt() const { return dt_; }
+  // s: the stability estimate dt: auto takes its share of (after any mass scaling).
+  double stable_dt() const { return stable_dt_; }
   void set_dt(double dt) { dt_ = dt; }  // s
 
   // One explicit step of dt with the scene's integrator; loads at the new time. An unstable
@@ -81,6 +85,11 @@ class Simulator {
   void restore(State state, double load_time, const StaticProgress& progress);
 
   double kinetic_energy() const;  // J
+  // kg: the inertia mass scaling (simulation.mass_scaling_dt) or the static relaxation's
+  // fictitious masses add to the true masses, summed over the nodes.
+  double added_inertia() const;
+  // kg per node: the inertia the steps use (the masses unless scaled, above).
+  const std::vector<double>& inertia() const { return inertia_.empty() ? model_.mass : inertia_; }
   // Largest nodal force (N) on the free axes, less the part a volume constraint balances.
   double max_residual_force();
   // Force (N) each position constraint exerts on its node, on the held axes (zero on free
@@ -113,12 +122,14 @@ class Simulator {
   struct ContactStep begin_contact_step(double dt);
   void end_contact_step(double dt);
   void scale_masses_for_relaxation();
+  void scale_masses_to(double target);  // s: mass scaling, dynamics
   void fire_update(StaticProgress& fire);
   static void release_free_memory();
 
   Model model_;
   State state_;
   double dt_ = 0.0;
+  double stable_dt_ = 0.0;
   double load_time_ = 0.0;  // time at which State::f was evaluated
   StaticProgress static_progress_;
   // Sized once: no allocation in a step. Memory is the limit on large models (README), so
@@ -136,7 +147,6 @@ class Simulator {
   // Inertia of each node in the pseudo-dynamics: its mass, or in static mode a fictitious
   // mass that gives every node the same Gershgorin frequency (inertia_ empty: the masses).
   std::vector<double> inertia_;
-  const std::vector<double>& inertia() const { return inertia_.empty() ? model_.mass : inertia_; }
 };
 
 }  // namespace phymul

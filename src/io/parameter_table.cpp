@@ -169,6 +169,13 @@ std::vector<Parameter> simulation_parameters() {
        .default_value = "0.5",
        .doc = "Fraction of the stability limit used by `dt: auto`."},
       {.section = "simulation",
+       .name = "mass_scaling_dt",
+       .kind = Kind::quantity,
+       .dimension = Dimension::time,
+       .range = gt(0),
+       .doc = "Dynamics: nodes whose stability limit is below this get the inertia that lifts it "
+              "to this (mass scaling; gravity keeps the true masses). Default: none."},
+      {.section = "simulation",
        .name = "duration",
        .kind = Kind::quantity,
        .dimension = Dimension::time,

@@ -299,7 +299,7 @@ RunReport run_scene(const Scene& scene, const RunOptions& options) {
   report.nodes = model.node_count();
   report.threads = omp_get_max_threads();
   report.dt = sim.dt();
-  report.stable_dt = stable_time_step(model);
+  report.stable_dt = sim.stable_dt();
   ProgressLine progress(options.progress);
   Run run{scene, options, sim, out, report, progress, scene_hash, model_id};
   const auto start = std::chrono::steady_clock::now();

@@ -71,7 +71,12 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
   if (model_.settings.mode == SolveMode::static_equilibrium &&
       model_.settings.relaxation_mass_scaling)
     scale_masses_for_relaxation();
-  const double stable = stable_time_step(model_);
+  double stable = stable_time_step(model_);
+  if (model_.settings.mode == SolveMode::dynamic && model_.settings.mass_scaling_dt) {
+    scale_masses_to(*model_.settings.mass_scaling_dt);
+    if (!inertia_.empty()) stable = stable_time_step(model_, inertia_);
+  }
+  stable_dt_ = stable;
   dt_ = model_.settings.dt ? *model_.settings.dt : model_.settings.dt_safety * stable;
   if (!std::isfinite(dt_)) dt_ = 1e-3;  // no stiffness at all: any step is stable
   apply_position_constraints(model_, state_.x, 0.0, f_start_);  // free between steps
@@ -107,6 +112,32 @@ void Simulator::scale_masses_for_relaxation() {
     for (int a = 0; a < 3; ++a)
       if (model_.inverse_mass[i][a] != 0.0) model_.inverse_mass[i][a] = 1.0 / inertia_[i];
   }
+}
+
+// Explicit FEM's mass scaling: the few light nodes that alone set the stable step (the
+// corners of a mapped grid, 8 times lighter than interior nodes) get the inertia that lifts
+// their Gershgorin limit to `target`. Gravity keeps the true masses (Model::mass), so
+// equilibria do not change; the dynamics of those nodes are slowed (added_inertia() says
+// by how much mass).
+void Simulator::scale_masses_to(double target) {
+  const std::vector<double> row = stiffness_row_sums(model_);
+  std::vector<double> inertia = model_.mass;
+  bool scaled = false;
+  for (int i = 0; i < model_.node_count(); ++i) {
+    const double needed = row[i] * target * target / 4.0;  // 2 / sqrt(row / m) = target
+    if (!(needed > inertia[i])) continue;
+    inertia[i] = needed;
+    scaled = true;
+    for (int a = 0; a < 3; ++a)
+      if (model_.inverse_mass[i][a] != 0.0) model_.inverse_mass[i][a] = 1.0 / needed;
+  }
+  if (scaled) inertia_ = std::move(inertia);
+}
+
+double Simulator::added_inertia() const {
+  double added = 0.0;
+  for (size_t i = 0; i < inertia_.size(); ++i) added += inertia_[i] - model_.mass[i];
+  return added;
 }
 
 void Simulator::step() {
@@ -252,7 +283,7 @@ void Simulator::check_stability() const {
                     "is {:.3g} s: set simulation.dt smaller (or 'auto' with dt_safety below "
                     "0.5), add damping, or check the stiffness and masses.",
                     s.time, s.step, i, c >= 0 ? model_.components[c].name : "?", what, dt_,
-                    stable_time_step(model_)),
+                    stable_dt_),
         i, s.time);
   };
   const int n = model_.node_count();

@@ -33,10 +33,12 @@ std::vector<double> stiffness_row_sums(const Model& model) {
   return row;
 }
 
-double stable_time_step(const Model& model) {
+double stable_time_step(const Model& model) { return stable_time_step(model, model.mass); }
+
+double stable_time_step(const Model& model, const std::vector<double>& inertia) {
   const std::vector<double> row = stiffness_row_sums(model);
   double omega2 = 0.0;
-  for (int i = 0; i < model.node_count(); ++i) omega2 = std::max(omega2, row[i] / model.mass[i]);
+  for (int i = 0; i < model.node_count(); ++i) omega2 = std::max(omega2, row[i] / inertia[i]);
   if (omega2 == 0.0) return std::numeric_limits<double>::infinity();
   const double omega = std::sqrt(omega2);
   // Central differences with viscous damping c: dt < (2/w)(sqrt(1 + xi^2) - xi), xi = c/(2w).

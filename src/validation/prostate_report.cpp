@@ -40,8 +40,19 @@ std::string json(const Study& study) {
   }
   j += fmt::format("\n  ],\n  \"prostate_stiffness_n_per_m\": {:.17g},\n  \"wall_time_s\": {:.6g}",
                    study.options.prostate_stiffness, study.wall_time);
-  if (study.real_time_factor > 0.0)
-    j += fmt::format(",\n  \"real_time_factor\": {:.6g}", study.real_time_factor);
+  if (!study.real_time.empty()) {
+    j += ",\n  \"real_time\": [";
+    for (size_t k = 0; k < study.real_time.size(); ++k) {
+      const RealTimeRun& r = study.real_time[k];
+      j += fmt::format(
+          "{}\n    {{\"bladder_volume_ml\": {:.6g}, \"probe\": \"{}\", \"steps\": {}, "
+          "\"dt_s\": {:.6g}, \"wall_time_s\": {:.6g}, \"real_time_factor\": {:.6g}, "
+          "\"cpu_real_time_factor\": {:.6g}, \"added_mass_pct\": {:.6g}}}",
+          k ? "," : "", r.filling * 1e6, probe_name(r.probe), r.steps, r.dt, r.wall_time,
+          r.real_time_factor, r.cpu_real_time_factor, r.added_mass_pct);
+    }
+    j += fmt::format("\n  ],\n  \"real_time_factor\": {:.6g}", study.real_time_factor);
+  }
   return j + "\n}\n";
 }
 

@@ -16,7 +16,42 @@ std::string vec_mm(const Vec3& v) {
   return fmt::format("[{}, {}, {}]", mm(v.x()), mm(v.y()), mm(v.z()));
 }
 
+// The bladder neck: a few nodes both organs share where the bladder rests on the prostate's
+// base (the prostate's top node).
+std::string neck_stitch(const Options& o, double bladder_r) {
+  const Vec3 top = Vec3(0, 0, o.prostate_radii.z());
+  if (o.neck == Neck::prostate) {
+    const double band = o.prostate_radii.z() / o.prostate_hexahedra;  // half a cell
+    return fmt::format(
+        "stitches:\n"
+        "  - object: prostate\n"
+        "    nodes: {{box: {{min: {}, max: {}}}}}\n"
+        "    with: bladder\n"
+        "    tolerance: {}\n",
+        vec_mm(top - Vec3(o.stitch_radius, o.stitch_radius, band)),
+        vec_mm(top + Vec3(o.stitch_radius, o.stitch_radius, band)), mm(o.stitch_tolerance));
+  }
+  // The icosphere has a vertex at each pole; subdividing halves the angle to its first ring
+  // of neighbours, atan(2) on the icosahedron. The sphere takes that ring, not the next.
+  const double ring = std::atan(2.0) / std::pow(2.0, o.bladder_subdivisions);
+  return fmt::format(
+      "stitches:\n"
+      "  - object: bladder\n"
+      "    nodes: {{sphere: {{center: {}, radius: {}}}}}\n"
+      "    with: prostate\n"
+      "    tolerance: {}\n",
+      vec_mm(top), mm(2.0 * bladder_r * std::sin(0.75 * ring)), mm(o.stitch_tolerance));
+}
+
 }  // namespace
+
+Options coarse_bladder(Options o) {
+  o.bladder_subdivisions = 2;
+  o.neck = Neck::bladder;
+  o.stitch_tolerance = 0.008;
+  o.mass_scaling_dt = 250e-6;
+  return o;
+}
 
 const char* probe_name(Probe probe) { return probe == Probe::pressure ? "pressure" : "rigid"; }
 
@@ -31,7 +66,6 @@ Vec3 bladder_centre(const Options& o, double filling) {
 std::string scene_text(const Options& o, const SceneSettings& s) {
   const double r = bladder_radius(s.filling);
   const double bladder_mass = o.bladder_wall_mass + o.urine_density * s.filling;
-  const Vec3 top = Vec3(0, 0, o.prostate_radii.z());
   const double load_start = s.duration * s.settle_fraction;
   std::string t;
   t += fmt::format(
@@ -40,9 +74,13 @@ std::string scene_text(const Options& o, const SceneSettings& s) {
       "# source of every number.\n",
       s.filling * 1e6, probe_name(s.probe));
   t += "simulation:\n";
-  if (s.dynamic)
-    t += fmt::format("  dt: auto\n  damping: {:.17g} 1/s\n", o.damping);
-  else
+  if (s.dynamic) {
+    t += fmt::format("  dt: auto\n  dt_safety: {}\n", o.dt_safety);
+    if (o.mass_scaling_dt > 0.0)
+      t += fmt::format("  mass_scaling_dt: {:.6g} us\n", o.mass_scaling_dt * 1e6);
+    t += fmt::format("  damping: {:.17g} 1/s\n", o.damping);
+  }
+  if (!s.dynamic)
     t += fmt::format("  mode: static\n  tolerance: {:.17g} N\n  load_steps: {}\n  relaxation: {}\n",
                      s.probe == Probe::rigid ? o.contact_tolerance : o.tolerance, s.load_steps,
                      "kinetic");
@@ -71,17 +109,7 @@ std::string scene_text(const Options& o, const SceneSettings& s) {
       "      - {{t: 0 s, value: {:.17g} mL}}\n",
       o.bladder_subdivisions, vec_mm(bladder_centre(o, s.filling)), o.bladder_stiffness,
       bladder_mass * 1e3, s.filling * 1e6, fmt::arg("r", mm(r)));
-  // The bladder neck: the prostate's base nodes near its axis, each with its nearest
-  // bladder node.
-  const double band = o.prostate_radii.z() / o.prostate_hexahedra;  // half a cell
-  t += fmt::format(
-      "stitches:\n"
-      "  - object: prostate\n"
-      "    nodes: {{box: {{min: {}, max: {}}}}}\n"
-      "    with: bladder\n"
-      "    tolerance: {}\n",
-      vec_mm(top - Vec3(o.stitch_radius, o.stitch_radius, band)),
-      vec_mm(top + Vec3(o.stitch_radius, o.stitch_radius, band)), mm(o.stitch_tolerance));
+  t += neck_stitch(o, r);
   // The prostate's lateral sides are held (the endopelvic fascia on the levator ani); the
   // bladder hangs by its top node.
   const double side = o.anchor_fraction * o.prostate_radii.x();

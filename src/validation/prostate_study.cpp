@@ -141,6 +141,20 @@ SceneSettings study_scene(const Options& o, double filling, Probe probe) {
   return s;
 }
 
+SceneSettings dynamic_scene(const Options& o, double filling, Probe probe) {
+  SceneSettings s = study_scene(o, filling, probe);
+  if (probe == Probe::rigid) {
+    Simulator sim(compile(o, s));
+    relax_to(sim, s.duration * s.settle_fraction);
+    // Whole micrometres below touching: the scene file reads back the same number on any
+    // build, and the probe starts just clear of the prostate.
+    const double z = touching_axis_height(sim.model(), sim.state(), o.probe_radius);
+    s.probe_axis_point.z() = std::floor(z * 1e6) * 1e-6;
+  }
+  s.dynamic = true;
+  return s;
+}
+
 FillingResult run_filling(const Options& o, double filling, Probe probe,
                           const std::filesystem::path& out) {
   Frames frames_here;
@@ -150,13 +164,18 @@ FillingResult run_filling(const Options& o, double filling, Probe probe,
   FillingResult r;
   r.filling = filling;
   r.probe = probe;
+  State gravity_equilibrium;
   if (probe == Probe::rigid) {  // place the probe against the prostate's equilibrium
     Simulator sim(compile(o, s));
     r.iterations += relax_to(sim, settle).iterations;
     s.probe_axis_point.z() = touching_axis_height(sim.model(), sim.state(), o.probe_radius);
+    gravity_equilibrium = sim.state();
   }
   Simulator sim(compile(o, s));
   const Model& model = sim.model();
+  // The probe only touches that equilibrium: the run starts from it instead of relaxing
+  // gravity again.
+  if (probe == Probe::rigid) sim.restore(std::move(gravity_equilibrium), settle, {});
   r.iterations += relax_to(sim, settle).iterations;
   r.before = sim.state().x;
   if (frames) frames->push_back({settle, sim.state().x});

@@ -49,16 +49,18 @@ TEST(ProstateCli, RefusesAFillingOutOfRange) {
 }
 
 TEST(ProstateExamples, AreTheScenesTheStudyWrites) {
-  const prostate::Options options;
-  for (double ml : {50.0, 400.0})
-    for (prostate::Probe probe : {prostate::Probe::pressure, prostate::Probe::rigid}) {
-      prostate::SceneSettings s = prostate::study_scene(options, ml * 1e-6, probe);
-      s.dynamic = true;
-      const auto file =
-          source_dir() / "examples" / "prostate" / (prostate::run_name(ml * 1e-6, probe) + ".yaml");
-      EXPECT_EQ(read_text(file), prostate::scene_text(options, s)) << file;
-      EXPECT_NO_THROW(compile_scene(load_scene(file))) << file;
-    }
+  for (const auto& [options, dir] :
+       {std::pair{prostate::Options{}, "prostate"},
+        std::pair{prostate::coarse_bladder(prostate::Options{}), "prostate/coarse"}})
+    for (double ml : {50.0, 400.0})
+      for (prostate::Probe probe : {prostate::Probe::pressure, prostate::Probe::rigid}) {
+        // The rigid probe placed against the gravity equilibrium, in whole micrometres.
+        const prostate::SceneSettings s = prostate::dynamic_scene(options, ml * 1e-6, probe);
+        const auto file =
+            source_dir() / "examples" / dir / (prostate::run_name(ml * 1e-6, probe) + ".yaml");
+        EXPECT_EQ(read_text(file), prostate::scene_text(options, s)) << file;
+        EXPECT_NO_THROW(compile_scene(load_scene(file))) << file;
+      }
 }
 
 }  // namespace
