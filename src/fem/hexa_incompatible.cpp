@@ -58,33 +58,62 @@ DeviatoricResponse pointwise_volumetric(const Mat3& grad_u, double kappa, bool f
   return out;
 }
 
+// The whole law at one Gauss point: energy density, stress and tangent. False when the
+// deformation inverts the point.
+bool point_response(const Mat3& grad_u, const LawConstants& law, DeviatoricResponse& out) {
+  const bool finite_strain = law.law == Law::neo_hookean;
+  if (finite_strain && !(det_minus_one(grad_u) > -1.0)) return false;
+  out = finite_strain ? neo_hookean_deviatoric(grad_u, law.moduli.mu, true)
+                      : linear_deviatoric(grad_u, law.moduli.mu, true);
+  const DeviatoricResponse vol = pointwise_volumetric(grad_u, law.moduli.kappa, finite_strain);
+  out.energy += vol.energy;
+  out.stress += vol.stress;
+  out.tangent += vol.tangent;
+  return true;
+}
+
 // Energy, force on the 8 nodes and 3 modes, and the 33 x 33 tangent.
 bool evaluate_enriched(const IncompatibleHexaReference& ref,
                        const Eigen::Matrix<double, 3, kAll>& u, const LawConstants& law,
                        ElementResult<kAll>& out) {
-  const bool finite_strain = law.law == Law::neo_hookean;
   out.energy = 0.0;
   out.force.setZero();
   out.stiffness.setZero();
+  DeviatoricResponse p;
   for (int g = 0; g < 8; ++g) {
-    const Mat3 grad_u = u * ref.grad[g];
-    if (finite_strain && !(det_minus_one(grad_u) > -1.0)) return false;
-    const DeviatoricResponse dev = finite_strain
-                                       ? neo_hookean_deviatoric(grad_u, law.moduli.mu, true)
-                                       : linear_deviatoric(grad_u, law.moduli.mu, true);
-    const DeviatoricResponse vol = pointwise_volumetric(grad_u, law.moduli.kappa, finite_strain);
+    if (!point_response(u * ref.grad[g], law, p)) return false;
     const double w = ref.weight[g];
-    out.energy += w * (dev.energy + vol.energy);
-    out.force.noalias() += (w * (dev.stress + vol.stress)) * ref.grad[g].transpose();
-    add_material<kAll>(out.stiffness, ref.grad[g], dev.tangent + vol.tangent, w);
+    out.energy += w * p.energy;
+    out.force.noalias() += (w * p.stress) * ref.grad[g].transpose();
+    add_material<kAll>(out.stiffness, ref.grad[g], p.tangent, w);
   }
   return true;
 }
 
 using ModeVector = Eigen::Matrix<double, 9, 1>;
 
-ModeVector mode_force(const ElementResult<kAll>& r) {
-  return Eigen::Map<const ModeVector>(r.force.data() + 3 * kNodes);
+// What the local solve needs, a ninth of the full tangent's work: the energy, the force on
+// the modes (index 3 k + axis) and their 9 x 9 block.
+struct ModeState {
+  double energy = 0.0;
+  ModeVector force = ModeVector::Zero();
+  Stiffness<3> hessian = Stiffness<3>::Zero();
+};
+
+bool evaluate_modes(const IncompatibleHexaReference& ref, const Eigen::Matrix<double, 3, kAll>& u,
+                    const LawConstants& law, ModeState& out) {
+  out = ModeState{};
+  Eigen::Map<Mat3> force(out.force.data());
+  DeviatoricResponse p;
+  for (int g = 0; g < 8; ++g) {
+    if (!point_response(u * ref.grad[g], law, p)) return false;
+    const double w = ref.weight[g];
+    const Mat3 modes_grad = ref.grad[g].bottomRows<3>();
+    out.energy += w * p.energy;
+    force.noalias() += (w * p.stress) * modes_grad.transpose();
+    add_material<3>(out.hessian, modes_grad, p.tangent, w);
+  }
+  return true;
 }
 
 }  // namespace
@@ -123,25 +152,24 @@ bool evaluate_incompatible_hexa(const IncompatibleHexaReference& ref,
   Eigen::Matrix<double, 3, kAll> full;
   full.leftCols<kNodes>() = u;
   full.rightCols<3>() = modes;
-  ElementResult<kAll> r, trial;
-  if (!evaluate_enriched(ref, full, law, r)) return false;
+  ModeState r, trial;
+  if (!evaluate_modes(ref, full, law, r)) return false;
   Eigen::LDLT<Eigen::Matrix<double, 9, 9>> kaa;
   double shift = 0.0;
   for (int it = 0;; ++it) {
     if (it == kMaxIterations) return false;
-    const Eigen::Matrix<double, 9, 9> hessian = r.stiffness.block<9, 9>(3 * kNodes, 3 * kNodes);
-    const double scale = hessian.diagonal().cwiseAbs().maxCoeff();
-    kaa.compute(hessian + shift * Eigen::Matrix<double, 9, 9>::Identity());
+    const double scale = r.hessian.diagonal().cwiseAbs().maxCoeff();
+    kaa.compute(r.hessian + shift * Eigen::Matrix<double, 9, 9>::Identity());
     if (kaa.info() != Eigen::Success || !kaa.isPositive()) {
       shift = std::max(4.0 * shift, 1e-6 * scale);
       continue;
     }
-    const ModeVector step = -kaa.solve(mode_force(r));
+    const ModeVector step = -kaa.solve(r.force);
     if (!step.allFinite()) return false;
     if (shift == 0.0 && step.lpNorm<Eigen::Infinity>() <= small_step) break;
     Eigen::Matrix<double, 3, kAll> next = full;
     next.rightCols<3>() += Eigen::Map<const Mat3>(step.data());
-    const bool downhill = evaluate_enriched(ref, next, law, trial) &&
+    const bool downhill = evaluate_modes(ref, next, law, trial) &&
                           trial.energy <= r.energy + 1e-13 * std::abs(r.energy);
     if (!downhill) {
       shift = std::max(4.0 * shift, 1e-6 * scale);
@@ -151,12 +179,14 @@ bool evaluate_incompatible_hexa(const IncompatibleHexaReference& ref,
     std::swap(r, trial);
     shift = shift < 1e-6 * scale ? 0.0 : 0.25 * shift;
   }
+  ElementResult<kAll> whole;  // once, at the solution
+  if (!evaluate_enriched(ref, full, law, whole)) return false;
   modes = full.rightCols<3>();
-  out.energy = r.energy;
-  out.force = r.force.leftCols<kNodes>();
+  out.energy = whole.energy;
+  out.force = whole.force.leftCols<kNodes>();
   if (with_tangent) {
-    const auto kau = r.stiffness.block<9, 3 * kNodes>(3 * kNodes, 0);
-    out.stiffness = r.stiffness.topLeftCorner<3 * kNodes, 3 * kNodes>() -
+    const auto kau = whole.stiffness.block<9, 3 * kNodes>(3 * kNodes, 0);
+    out.stiffness = whole.stiffness.topLeftCorner<3 * kNodes, 3 * kNodes>() -
                     kau.transpose() * kaa.solve(Eigen::Matrix<double, 9, 3 * kNodes>(kau));
   }
   return true;

@@ -496,7 +496,7 @@ std::vector<Parameter> material_parameters() {
        .when = {kFem},
        .doc = "`solver: newton` hexahedra: mean dilatation (Q1/P0, no locking near nu = 0.5), "
               "or Wilson's incompatible modes (CalculiX's C3D8I: bends exactly, a little stiffer "
-              "near nu = 0.5, 3-8 times slower)."},
+              "near nu = 0.5, 4-6 times slower)."},
       {.section = "material",
        .name = "density",
        .kind = Kind::quantity,
