@@ -89,7 +89,7 @@ def last_frame(pvd_path):
 
 def obstacle_grid(vtu_path):
     """The obstacles' surfaces written with a frame (<stem>_obstacles_<n>.vtu), or None."""
-    match = re.match(r"^(.*)_(\d{6})\.vtu$", os.path.basename(vtu_path))
+    match = re.match(r"^(.*)_(\d+)\.vtu$", os.path.basename(vtu_path))
     if not match:
         return None
     path = os.path.join(os.path.dirname(vtu_path),

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "io/obstacle_surface.hpp"
 #include "phymul/prostate.hpp"
 #include "phymul/simulator.hpp"
 #include "phymul/vtk.hpp"
@@ -102,6 +103,21 @@ StaticResult relax_to(Simulator& sim, double load_time) {
   return r;
 }
 
+// The rigid probe at each equilibrium, beside its frame (<name>_obstacles_<k>.vtu), so that
+// the pictures show it.
+void write_obstacles(const std::filesystem::path& dir, const std::string& name, const Model& model,
+                     const Frames& frames) {
+  for (size_t k = 0; k < frames.size() && !model.obstacles.empty(); ++k) {
+    Vec3 lo = frames[k].x.front(), hi = lo;
+    for (const Vec3& p : frames[k].x) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+    std::vector<int> owner;
+    const Mesh surfaces = obstacle_surfaces(model.obstacles, frames[k].time, lo, hi, owner);
+    const CellField cells[] = {{"obstacle", owner}};
+    write_vtu(dir / fmt::format("{}_obstacles_{}.vtu", name, k), surfaces.points, surfaces.cells,
+              {}, cells);
+  }
+}
+
 // The scene, and every equilibrium as a .vtu of the series <name>.pvd (time: load time).
 void write_run(const std::filesystem::path& dir, const std::string& name, const std::string& scene,
                const Model& model, const Frames& frames) {
@@ -119,6 +135,7 @@ void write_run(const std::filesystem::path& dir, const std::string& name, const 
     write_vtu(dir / file, frames[k].x, model.cells, fields, cells);
     entries.push_back({frames[k].time, file});
   }
+  write_obstacles(dir, name, model, frames);
   write_pvd(dir / (name + ".pvd"), entries);
 }
 

@@ -42,6 +42,21 @@ TEST(ProstateCli, WritesTheTableTheJsonAndTheSeries) {
   }
 }
 
+// The rigid probe is written beside each equilibrium, so that its pictures show it.
+TEST(ProstateCli, RigidRunsWriteTheProbeBesideEachFrame) {
+  TempDir dir;
+  const auto r = run_command(
+      fmt::format("OMP_NUM_THREADS=1 '{}' prostate --fillings 50 --probe rigid --no-pictures "
+                  "--no-real-time -q -o '{}'",
+                  cli(), (dir.path() / "out").string()));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (int k = 0; k < 5; ++k) {
+    const auto probe = dir.path() / "out" / fmt::format("50mL_rigid_obstacles_{}.vtu", k);
+    ASSERT_TRUE(std::filesystem::exists(probe)) << probe;
+    EXPECT_NE(read_text(probe).find("Name=\"obstacle\""), std::string::npos);
+  }
+}
+
 TEST(ProstateCli, RefusesAFillingOutOfRange) {
   const auto r = run_command(fmt::format("'{}' prostate --fillings 2000 -q", cli()));
   EXPECT_NE(r.exit_code, 0);
