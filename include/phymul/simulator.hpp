@@ -123,6 +123,7 @@ class Simulator {
   void end_contact_step(double dt);
   void scale_masses_for_relaxation();
   void scale_masses_to(double target);  // s: mass scaling, dynamics
+  void give_inertia(int i, double inertia);
   void fire_update(StaticProgress& fire);
   static void release_free_memory();
 

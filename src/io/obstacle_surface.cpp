@@ -3,6 +3,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "phymul/vtk.hpp"
+
 namespace phymul {
 namespace {
 
@@ -118,6 +120,17 @@ Mesh obstacle_surfaces(std::span<const RigidObstacle> obstacles, double load_tim
     cell_obstacle.resize(mesh.cells.size(), int(k));
   }
   return mesh;
+}
+
+void write_obstacle_surfaces(const std::filesystem::path& path,
+                             std::span<const RigidObstacle> obstacles, double load_time,
+                             std::span<const Vec3> x) {
+  Vec3 lo = x.front(), hi = lo;
+  for (const Vec3& p : x) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  std::vector<int> owner;
+  const Mesh surfaces = obstacle_surfaces(obstacles, load_time, lo, hi, owner);
+  const CellField cells[] = {{"obstacle", owner}};
+  write_vtu(path, surfaces.points, surfaces.cells, {}, cells);
 }
 
 }  // namespace phymul

@@ -3,6 +3,7 @@
 // the pictures and in ParaView.
 #pragma once
 
+#include <filesystem>
 #include <span>
 
 #include "phymul/mesh.hpp"
@@ -17,5 +18,11 @@ namespace phymul {
 // endorectal probe's open base a cylinder reaching back that diagonal from its tip.
 Mesh obstacle_surfaces(std::span<const RigidObstacle> obstacles, double load_time, const Vec3& lo,
                        const Vec3& hi, std::vector<int>& cell_obstacle);
+
+// Those surfaces, cut to the bounding box of the body's positions x, as a .vtu (cell field
+// `obstacle`) at `path`, written atomically: the frame that goes beside the body's.
+void write_obstacle_surfaces(const std::filesystem::path& path,
+                             std::span<const RigidObstacle> obstacles, double load_time,
+                             std::span<const Vec3> x);
 
 }  // namespace phymul

@@ -93,15 +93,9 @@ std::string obstacle_frame_name(const std::string& stem, size_t frame) {
 }  // namespace
 
 void ResultWriter::write_obstacles(Simulator& sim, int frame) {
-  const Model& m = sim.model();
-  if (m.obstacles.empty()) return;
-  Vec3 lo = sim.state().x.front(), hi = lo;
-  for (const Vec3& p : sim.state().x) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  std::vector<int> obstacle;
-  const Mesh surfaces = obstacle_surfaces(m.obstacles, sim.load_time(), lo, hi, obstacle);
-  const CellField cells[] = {{"obstacle", obstacle}};
-  write_vtu(dir_ / obstacle_frame_name(stem_, size_t(frame)), surfaces.points, surfaces.cells, {},
-            cells);
+  if (!has_obstacles_) return;
+  write_obstacle_surfaces(dir_ / obstacle_frame_name(stem_, size_t(frame)), sim.model().obstacles,
+                          sim.load_time(), sim.state().x);
 }
 
 // The obstacles' frames are named after the body's, at the same times, so their list
@@ -136,17 +130,16 @@ void ResultWriter::write_monitors(const std::string& text) {
 }
 
 void ResultWriter::restore(std::vector<PvdEntry> frames, const std::string& monitors_text) {
-  for (const PvdEntry& e : frames)
-    if (vtk_ && !std::filesystem::is_regular_file(dir_ / e.file))
+  auto require = [&](const std::string& file) {
+    if (!std::filesystem::is_regular_file(dir_ / file))
       throw std::runtime_error(fmt::format(
-          "cannot resume in {}: frame {} of the checkpoint is missing", dir_.string(), e.file));
+          "cannot resume in {}: frame {} of the checkpoint is missing", dir_.string(), file));
+  };
+  for (size_t k = 0; k < frames.size() && vtk_; ++k) {
+    require(frames[k].file);
+    if (has_obstacles_) require(obstacle_frame_name(stem_, k));
+  }
   pvd_ = std::move(frames);
-  if (vtk_)
-    for (size_t k = 0; k < pvd_.size(); ++k)
-      if (has_obstacles_ && !std::filesystem::is_regular_file(dir_ / obstacle_frame_name(stem_, k)))
-        throw std::runtime_error(
-            fmt::format("cannot resume in {}: frame {} of the checkpoint is missing", dir_.string(),
-                        obstacle_frame_name(stem_, k)));
   const auto path = dir_ / "monitors.csv.tmp";
   monitors_.close();
   monitors_.open(path, std::ios::trunc);

@@ -195,11 +195,6 @@ fem::Result solve(const Scene& scene, const fem::Problem& problem) {
 
 RunReport run_newton(const Scene& scene, const RunOptions& options) {
   refuse_checkpoints(options);
-  std::error_code ec;
-  if (std::filesystem::exists(options.output_dir, ec) &&
-      !std::filesystem::is_directory(options.output_dir, ec))
-    throw std::runtime_error(fmt::format("output directory '{}' exists and is not a directory",
-                                         options.output_dir.string()));
   Simulator sim(compile_scene(scene));
   const Model& model = sim.model();
   fem::Problem problem = newton_problem(scene, model);
@@ -249,6 +244,7 @@ RunReport run_newton(const Scene& scene, const RunOptions& options) {
         "that the constraints hold the objects (a free rigid motion has no equilibrium)",
         result.message, result.load_steps_done, problem.load_steps);
   }
+  std::error_code ec;
   std::filesystem::remove(checkpoint_path(options.output_dir), ec);
   out.finish(report);
   return report;

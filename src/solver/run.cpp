@@ -268,14 +268,14 @@ void install_interrupt_handlers() {
 }
 
 RunReport run_scene(const Scene& scene, const RunOptions& options) {
-  if (scene.simulation.mode == SolveMode::static_equilibrium &&
-      scene.simulation.solver == StaticSolver::newton)
-    return run_newton(scene, options);
   std::error_code ec;
   if (std::filesystem::exists(options.output_dir, ec) &&
       !std::filesystem::is_directory(options.output_dir, ec))
     throw std::runtime_error(fmt::format("output directory '{}' exists and is not a directory",
                                          options.output_dir.string()));
+  if (scene.simulation.mode == SolveMode::static_equilibrium &&
+      scene.simulation.solver == StaticSolver::newton)
+    return run_newton(scene, options);
   const std::uint64_t scene_hash = file_hash(scene.file);
   const std::optional<Checkpoint> from = checkpoint_to_resume(scene, options, scene_hash);
   Simulator sim(compile_scene(scene));

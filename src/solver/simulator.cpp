@@ -108,10 +108,15 @@ void Simulator::scale_masses_for_relaxation() {
   for (int i = 0; i < model_.node_count(); ++i) {
     // No stiffness, or nothing free to move (held, rigid): keeps its mass.
     if (row[i] == 0.0 || model_.inverse_mass[i] == Vec3::Zero()) continue;
-    inertia_[i] = row[i] / omega2;
-    for (int a = 0; a < 3; ++a)
-      if (model_.inverse_mass[i][a] != 0.0) model_.inverse_mass[i][a] = 1.0 / inertia_[i];
+    give_inertia(i, row[i] / omega2);
   }
+}
+
+// The node's inertia_ and the inverse mass of its free axes (held axes stay held).
+void Simulator::give_inertia(int i, double inertia) {
+  inertia_[size_t(i)] = inertia;
+  for (int a = 0; a < 3; ++a)
+    if (model_.inverse_mass[i][a] != 0.0) model_.inverse_mass[i][a] = 1.0 / inertia;
 }
 
 // Explicit FEM's mass scaling: the few light nodes that alone set the stable step (the
@@ -121,17 +126,15 @@ void Simulator::scale_masses_for_relaxation() {
 // by how much mass).
 void Simulator::scale_masses_to(double target) {
   const std::vector<double> row = stiffness_row_sums(model_);
-  std::vector<double> inertia = model_.mass;
+  inertia_ = model_.mass;
   bool scaled = false;
   for (int i = 0; i < model_.node_count(); ++i) {
     const double needed = row[i] * target * target / 4.0;  // 2 / sqrt(row / m) = target
-    if (!(needed > inertia[i])) continue;
-    inertia[i] = needed;
+    if (!(needed > inertia_[size_t(i)])) continue;
+    give_inertia(i, needed);
     scaled = true;
-    for (int a = 0; a < 3; ++a)
-      if (model_.inverse_mass[i][a] != 0.0) model_.inverse_mass[i][a] = 1.0 / needed;
   }
-  if (scaled) inertia_ = std::move(inertia);
+  if (!scaled) inertia_.clear();  // empty: the masses
 }
 
 double Simulator::added_inertia() const {

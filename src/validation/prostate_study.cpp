@@ -107,15 +107,9 @@ StaticResult relax_to(Simulator& sim, double load_time) {
 // the pictures show it.
 void write_obstacles(const std::filesystem::path& dir, const std::string& name, const Model& model,
                      const Frames& frames) {
-  for (size_t k = 0; k < frames.size() && !model.obstacles.empty(); ++k) {
-    Vec3 lo = frames[k].x.front(), hi = lo;
-    for (const Vec3& p : frames[k].x) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-    std::vector<int> owner;
-    const Mesh surfaces = obstacle_surfaces(model.obstacles, frames[k].time, lo, hi, owner);
-    const CellField cells[] = {{"obstacle", owner}};
-    write_vtu(dir / fmt::format("{}_obstacles_{}.vtu", name, k), surfaces.points, surfaces.cells,
-              {}, cells);
-  }
+  for (size_t k = 0; k < frames.size() && !model.obstacles.empty(); ++k)
+    write_obstacle_surfaces(dir / fmt::format("{}_obstacles_{}.vtu", name, k), model.obstacles,
+                            frames[k].time, frames[k].x);
 }
 
 // The scene, and every equilibrium as a .vtu of the series <name>.pvd (time: load time).
