@@ -29,10 +29,23 @@ int report_scene_error(const phymul::SceneError& e) {
   return kInputError;
 }
 
+// What a scene's `young` made of a shape-memory K, and how near the FEM that leaves it.
+void print_stiffness_calibrations(const phymul::Model& model) {
+  for (const phymul::StiffnessCalibration& c : model.stiffness_calibrations)
+    std::cout << fmt::format(
+        "  object '{}': K = {:.4g} N/m from E = {:.4g} Pa, nu = {:g} (alpha = K/(E h) = {:.3g}, "
+        "h = {:.3g} mm): compressed {:g} % along {} ({} and {} nodes clamped), the FEM takes "
+        "{:.4g} N; the displacements differ by {:.1f} % of the push rms, {:.1f} % at most\n",
+        c.component, c.stiffness, c.young, c.poisson, c.alpha, c.h * 1e3, c.strain * 100,
+        "xyz"[c.axis], c.held, c.pushed, c.fem_force, c.displacement_rms * 100,
+        c.displacement_max * 100);
+}
+
 int check(const std::string& file) {
   try {
     const phymul::Scene scene = phymul::load_scene(file);
     const phymul::Model model = phymul::compile_scene(scene);
+    print_stiffness_calibrations(model);
     if (scene.simulation.solver == phymul::StaticSolver::newton) {  // no time step to speak of
       std::cout << fmt::format("{}: ok ({} objects, {} nodes, {} cells; static, Newton)\n", file,
                                model.components.size(), model.node_count(), model.cells.size());

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "phymul/mesh.hpp"
+#include "phymul/model.hpp"
 
 namespace phymul::calibration {
 
@@ -47,14 +48,16 @@ struct Options {
 // The calibration load on one mesh.
 struct Compression {
   CellType type = CellType::hexa;
-  int cells = 0;                 // cells per cube edge
-  double h = 0.0;                // m, mean edge length
-  double poisson = 0.0;          // of the FEM
-  double fem_force = 0.0;        // N, |top reaction| of the FEM
-  double lsm_force_per_k = 0.0;  // N per N/m of K: |top reaction| of the shape memory
-  double alpha = 0.0;            // fem_force / (lsm_force_per_k * E * h)
-  double lsm_force = 0.0;        // N, |top reaction| relaxed again with K = alpha E h
-  double force_rel_diff = 0.0;   // (lsm_force - fem_force) / fem_force
+  int cells = 0;                  // cells per cube edge
+  double h = 0.0;                 // m, mean edge length
+  double poisson = 0.0;           // of the FEM
+  double fem_force = 0.0;         // N, |top reaction| of the FEM
+  double lsm_force_per_k = 0.0;   // N per N/m of K: |top reaction| of the shape memory
+  double alpha = 0.0;             // fem_force / (lsm_force_per_k * E * h)
+  double lsm_force = 0.0;         // N, |top reaction| relaxed again with K = alpha E h
+  double force_rel_diff = 0.0;    // (lsm_force - fem_force) / fem_force
+  double displacement_rms = 0.0;  // rms over nodes of |u_lsm - u_fem|, over the push
+  double displacement_max = 0.0;  // largest |u_lsm - u_fem|, over the push
   long lsm_iterations = 0;
   int fem_newton_iterations = 0;
 };
@@ -71,6 +74,8 @@ struct Cantilever {
   double euler_bernoulli_tip = 0.0;  // m, rho g A L^4 / (8 E I), for scale
   double tip_ratio = 0.0;            // lsm_tip / fem_tip
   double tip_rel_diff = 0.0;         // (lsm_tip - fem_tip) / fem_tip
+  double displacement_rms = 0.0;     // rms over nodes of |u_lsm - u_fem|, over fem_tip
+  double displacement_max = 0.0;     // largest |u_lsm - u_fem|, over fem_tip
   long lsm_iterations = 0;
 };
 
@@ -89,6 +94,18 @@ struct Result {
 // std::runtime_error when a solve does not converge.
 Compression calibrate_compression(CellType type, int cells, const Options& options = {});
 Cantilever check_cantilever(CellType type, int cells, double alpha, const Options& options = {});
+
+// A shape-memory object's K from its Young's modulus, calibrated on the object itself: its
+// mesh clamped at both ends along `axis` (the nodes within h/4 of the lowest and of the
+// highest coordinate, at least the 4 extreme ones each) and compressed by `strain` of its
+// extent, without slip; K makes the shape memory's force on the pushed nodes (with the
+// volume constraint when the object has one) the FEM's (linear law, `material.young` and
+// `material.poisson`; hexahedra with mean dilatation, tetrahedra and wedges cut into three).
+// The record also compares the two displacement fields. Throws std::invalid_argument for a
+// surface mesh or an object too thin along the axis, std::runtime_error when a solve fails.
+StiffnessCalibration calibrate_object(const std::string& name, const Mesh& mesh,
+                                      const MaterialSpec& material, bool volume_constraint,
+                                      int axis = 2, double strain = 0.01);
 
 // Every type at every resolution (cells per cube edge).
 Result run(const std::vector<CellType>& types, const std::vector<int>& resolutions,

@@ -176,6 +176,25 @@ struct FibreBundle {
   Schedule activation;              // a(t) in [0, 1], in x
 };
 
+// A shape-memory component's K from a Young's modulus (scene `young`): calibrated on the
+// component's own mesh against the reference FEM, by calibration::calibrate_object.
+struct StiffnessCalibration {
+  std::string component;
+  double young = 0.0, poisson = 0.0;  // Pa, -: the FEM's material
+  int axis = 2;                       // compression axis: 0 x, 1 y, 2 z
+  double strain = 0.0;                // nominal compression of the extent along the axis
+  double push = 0.0;                  // m
+  int held = 0, pushed = 0;           // nodes clamped at either end
+  double h = 0.0;                     // m, mean rest edge length
+  double fem_force = 0.0;             // N, along the axis on the pushed nodes
+  double stiffness = 0.0;             // N/m: the K whose force is fem_force
+  double alpha = 0.0;                 // stiffness / (young h), beside `phymul calibrate`
+  double displacement_rms = 0.0;      // rms over nodes of |u_lsm - u_fem|, over push
+  double displacement_max = 0.0;      // largest |u_lsm - u_fem|, over push
+  long lsm_iterations = 0;
+  int fem_newton_iterations = 0;
+};
+
 struct Model {
   std::vector<Vec3> rest_position;  // m
   std::vector<double> mass;         // kg
@@ -191,6 +210,7 @@ struct Model {
   std::vector<RigidObstacle> obstacles;
   std::vector<RigidBody> rigid_bodies;
   std::vector<FibreBundle> fibres;
+  std::vector<StiffnessCalibration> stiffness_calibrations;  // components given `young`
   // Doubled nodes (Fig. 1b): groups held at one position and velocity (mass-weighted).
   // Groups touching a rigid body are moved by the body instead (finalize).
   std::vector<std::array<int, 2>> doubled_pairs;   // as given (global ids)

@@ -96,9 +96,11 @@ enum class FemHexa { mean_dilatation, incompatible_modes };
 
 struct MaterialSpec {
   ElasticModel model = ElasticModel::shape_memory;
-  double stiffness = 0.0;            // N/m, shape memory spring of each node
-  double young = 0.0;                // Pa, fem: compressible Neo-Hookean
-  double poisson = 0.0;              // fem, in (-1, 0.5)
+  double stiffness = 0.0;  // N/m, shape memory spring of each node
+  double young = 0.0;      // Pa, fem: compressible Neo-Hookean; shape memory: K calibrated from it
+  double poisson = 0.0;    // in (-1, 0.5): fem, or the FEM the shape memory's K is calibrated on
+  int calibration_axis = 2;  // shape memory with young: the compression axis (0 x, 1 y, 2 z)
+  SourceLoc stiffness_loc, young_loc, poisson_loc, calibration_axis_loc;  // line 0 when absent
   double hourglass = 0.3;            // fem hexahedra (TLED): hourglass over the shear stiffness
   FemLaw law = FemLaw::neo_hookean;  // fem
   SourceLoc law_loc;                 // of `law`; line 0 when absent

@@ -69,7 +69,8 @@ struct StudyOptions {
   bool volume_constraint = true;  // shape-memory model
   bool sliding = false;           // plates let the faces slide (default: no slip)
   bool fem = true;                // also run the reference FEM
-  double young = 14.9e3;          // Pa (FEM; the shape-memory positions do not depend on it)
+  double young = 14.9e3;  // Pa: the FEM's, and the shape memory's K (calibrate_object), on which
+                          // its positions do not depend
   double poisson = 0.499;
   bool incompatible_modes = false;  // FEM hexahedra: Wilson's modes (C3D8I), not Q1/P0
   // Shape-memory equilibrium: largest residual force over K h (the force of a one-cell
@@ -84,7 +85,7 @@ struct LevelResult {
   Metrics metrics;
   std::vector<Vec3> positions;  // m, mesh nodes
   std::vector<Vec3> beads;      // m, simulated bead positions
-  double plate_force = 0.0;     // N, FEM only (the shape-memory K is not calibrated here)
+  double plate_force = 0.0;     // N; shape memory: at the K calibrated from young and poisson
   long iterations = 0;          // relaxation iterations (lsm) or Newton iterations (fem)
   double seconds = 0.0;         // wall time of this level's solve
 };

@@ -452,7 +452,8 @@ std::vector<Parameter> material_parameters() {
        .kind = Kind::quantity,
        .dimension = Dimension::stiffness,
        .range = gt(0),
-       .default_note = "required for shape-memory elastic and active objects",
+       .default_note = "required for shape-memory elastic and active objects, unless `young` "
+                       "is given",
        .when = {kShapeMemory},
        .doc = "Shape-memory spring of each node."},
       {.section = "material",
@@ -460,17 +461,30 @@ std::vector<Parameter> material_parameters() {
        .kind = Kind::quantity,
        .dimension = Dimension::pressure,
        .range = gt(0),
-       .required = true,
-       .when = {kFem},
-       .doc = "Young's modulus of the finite elements."},
+       .default_note = "required when `model` is `fem`",
+       .doc = "Young's modulus. Finite elements: of their law. Shape memory (instead of "
+              "`stiffness`, with `poisson`): K is calibrated on the object's own mesh, so that "
+              "a 1 % compression along `calibration_axis`, both ends clamped, takes the force "
+              "that finite elements of E and nu (linear law) take; `phymul check` prints K and "
+              "how far the two displacement fields differ. The calibration holds for that load: "
+              "in bending the shape memory can be 0.4-1.8 times as stiff (README)."},
       {.section = "material",
        .name = "poisson",
        .kind = Kind::quantity,
        .range = {-1.0, 0.5, true, true},
-       .required = true,
-       .when = {kFem},
-       .doc = "Poisson's ratio of the finite elements; near 0.5 the stable time step shrinks "
-              "with the bulk wave speed."},
+       .default_note = "required with `young`",
+       .doc = "Poisson's ratio of the finite elements (for shape memory, of those its K is "
+              "calibrated on); near 0.5 the explicit FEM's stable time step shrinks with the "
+              "bulk wave speed."},
+      {.section = "material",
+       .name = "calibration_axis",
+       .kind = Kind::choice,
+       .choices = {"x", "y", "z"},
+       .default_value = "z",
+       .when = {kShapeMemory},
+       .doc = "With `young`: the axis along which the object is compressed to calibrate K "
+              "(clamped: the nodes within a quarter of the mean edge of either end, at least "
+              "four)."},
       {.section = "material",
        .name = "hourglass",
        .kind = Kind::quantity,

@@ -195,6 +195,7 @@ class SceneBuilder {
   LinkSpec link(SectionReader& reader);
   void object_kind(SectionReader& reader, ObjectSpec& spec,
                    const std::optional<SourceLoc>& stiffness_at);
+  void elastic_material(const MaterialSpec& material);
   FibreSpec fibres(SectionReader& reader);
   OutputSpec output(SectionReader& reader);
   void refer(SectionReader& reader, std::string& object);
@@ -297,20 +298,51 @@ void SceneBuilder::object_kind(SectionReader& reader, ObjectSpec& spec,
   }
   if (auto fibre_reader = reader.map("fibres")) spec.fibres = fibres(*fibre_reader);
   if (!has_type) return;
-  const SourceLoc material_at = spec.material.loc;
   if (spec.type == ObjectType::rigid) {
     if (stiffness_at)
       context_.error(*stiffness_at,
                      "'stiffness' applies only to elastic and active objects "
                      "(this object is rigid)");
+    if (spec.material.young_loc.line > 0)
+      context_.error(spec.material.young_loc,
+                     "'young' applies only to elastic and active objects (this object is rigid)");
     if (spec.volume_constraint)
       context_.error(reader.value_loc("volume_constraint").value_or(reader.loc()),
                      "'volume_constraint' applies only to elastic and active objects (this "
                      "object is rigid)");
-  } else if (!stiffness_at && spec.material.model == ElasticModel::shape_memory &&
-             material_model_known_ && reader.value_loc("material") && material_at.line > 0) {
-    context_.error(material_at, "'stiffness' is required in 'material'");
+  } else if (material_model_known_ && reader.value_loc("material") && spec.material.loc.line > 0) {
+    elastic_material(spec.material);
   }
+}
+
+// Which of stiffness, young and poisson an elastic material needs: finite elements take E
+// and nu; shape memory takes K, or E and nu to calibrate K on.
+void SceneBuilder::elastic_material(const MaterialSpec& m) {
+  const auto given = [](const SourceLoc& loc) { return loc.line > 0; };
+  if (m.model == ElasticModel::fem) {
+    for (auto [key, loc] : {std::pair{"young", m.young_loc}, {"poisson", m.poisson_loc}})
+      if (!given(loc)) context_.error(m.loc, fmt::format("'{}' is required in 'material'", key));
+    return;
+  }
+  if (given(m.stiffness_loc) && given(m.young_loc))
+    context_.error(m.young_loc,
+                   "give only one of 'stiffness' (K) or 'young' (K calibrated from it) in "
+                   "'material'");
+  else if (!given(m.stiffness_loc) && !given(m.young_loc))
+    context_.error(m.loc,
+                   "'stiffness' is required in 'material' (or 'young' and 'poisson', to "
+                   "calibrate it against finite elements)");
+  if (given(m.young_loc) && !given(m.poisson_loc))
+    context_.error(m.loc,
+                   "'poisson' is required with 'young' in 'material' (the finite elements K is "
+                   "calibrated on)");
+  if (!given(m.young_loc))
+    for (auto [key, loc] :
+         {std::pair{"poisson", m.poisson_loc}, {"calibration_axis", m.calibration_axis_loc}})
+      if (given(loc))
+        context_.error(loc, fmt::format("'{}' applies to a shape-memory material only with "
+                                        "'young' (K calibrated from it)",
+                                        key));
 }
 
 FibreSpec SceneBuilder::fibres(SectionReader& reader) {
@@ -413,6 +445,12 @@ MaterialSpec SceneBuilder::material(SectionReader& reader) {
   reader.read("stiffness", spec.stiffness);
   reader.read("young", spec.young);
   reader.read("poisson", spec.poisson);
+  reader.read("calibration_axis", spec.calibration_axis, {{"x", 0}, {"y", 1}, {"z", 2}});
+  for (auto [key, loc] : {std::pair{"stiffness", &spec.stiffness_loc},
+                          {"young", &spec.young_loc},
+                          {"poisson", &spec.poisson_loc},
+                          {"calibration_axis", &spec.calibration_axis_loc}})
+    *loc = reader.value_loc(key).value_or(SourceLoc{});
   reader.read("hourglass", spec.hourglass);
   reader.read("law", spec.law, {{"neo-hookean", FemLaw::neo_hookean}, {"linear", FemLaw::linear}});
   spec.law_loc = reader.value_loc("law").value_or(SourceLoc{});

@@ -10,6 +10,7 @@
 #include "io/parameter_table.hpp"
 #include "io/units.hpp"
 #include "model/compile_interactions.hpp"
+#include "phymul/calibration.hpp"
 #include "phymul/model.hpp"
 #include "solver/newton_run.hpp"
 
@@ -63,7 +64,13 @@ struct Compiler {
                             motion.translation, motion.rotation);
         return;
       }
-      const int c = add_elastic_component(model, o.name, mesh, o.material);
+      MaterialSpec material = o.material;
+      if (material.model == ElasticModel::shape_memory && material.young > 0.0) {
+        model.stiffness_calibrations.push_back(calibration::calibrate_object(
+            o.name, mesh, material, o.volume_constraint, material.calibration_axis));
+        material.stiffness = model.stiffness_calibrations.back().stiffness;
+      }
+      const int c = add_elastic_component(model, o.name, mesh, material);
       if (o.type == ObjectType::active) model.components[c].kind = ComponentKind::active;
       if (o.volume_constraint) {
         add_volume_constraint(model, c);
@@ -209,14 +216,21 @@ void add_links(Compiler& k, const Scene& scene) {
   }
 }
 
+// The component's K, given or calibrated from its Young's modulus: the fibres' default.
+double shape_memory_stiffness(const Model& model, const std::string& component) {
+  for (const ShapeMemory& s : model.shape_memory)
+    if (s.component == component) return s.stiffness;
+  return 0.0;
+}
+
 void add_fibres_of(Compiler& k, const Scene& scene) {
   for (size_t c = 0; c < scene.objects.size(); ++c) {
     const ObjectSpec& o = scene.objects[c];
     if (o.type != ObjectType::active) continue;
     try {
       add_fibres(k.model, int(c), o.fibres.direction,
-                 o.fibres.stiffness.value_or(o.material.stiffness), o.fibres.max_contraction,
-                 o.fibres.activation);
+                 o.fibres.stiffness.value_or(shape_memory_stiffness(k.model, o.name)),
+                 o.fibres.max_contraction, o.fibres.activation);
     } catch (const std::exception& e) {
       k.fail(o.fibres.loc, e.what());
     }

@@ -7,7 +7,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iterator>
+#include <numeric>
 #include <stdexcept>
+#include <tuple>
+#include <utility>
 
 #include "phymul/fem.hpp"
 #include "phymul/model.hpp"
@@ -26,10 +30,10 @@ void check_type(CellType type) {
         fmt::format("calibration: mesh type must be hexa or tetra (got {})", cell_type_name(type)));
 }
 
-// The z-sum of the reactions on `nodes`, as a magnitude.
-double z_force(const std::vector<Vec3>& reaction, const std::vector<int>& nodes) {
+// The sum of the reactions on `nodes` along `axis`, as a magnitude.
+double axis_force(const std::vector<Vec3>& reaction, const std::vector<int>& nodes, int axis) {
   double f = 0.0;
-  for (int n : nodes) f += reaction[n].z();
+  for (int n : nodes) f += reaction[n][axis];
   return std::abs(f);
 }
 
@@ -38,6 +42,20 @@ const std::vector<int>& node_set(const Mesh& mesh, const std::string& name) {
   if (it == mesh.node_sets.end() || it->second.empty())
     throw std::logic_error("calibration: the box has no node set " + name);
   return it->second;
+}
+
+// rms and largest |u_lsm - u_fem| over the nodes, divided by `scale`.
+std::pair<double, double> displacement_difference(const std::vector<Vec3>& rest,
+                                                  const std::vector<Vec3>& lsm_positions,
+                                                  const std::vector<Vec3>& fem_displacement,
+                                                  double scale) {
+  double sum2 = 0.0, largest = 0.0;
+  for (size_t i = 0; i < rest.size(); ++i) {
+    const double d = (lsm_positions[i] - rest[i] - fem_displacement[i]).norm();
+    sum2 += d * d;
+    largest = std::max(largest, d);
+  }
+  return {std::sqrt(sum2 / double(rest.size())) / scale, largest / scale};
 }
 
 MaterialSpec shape_memory_material(double stiffness, double density) {
@@ -74,6 +92,70 @@ double mean_edge_length(const Mesh& mesh) {
   return sum / double(count);
 }
 
+namespace {
+
+// One bonded push applied to both models: `held` clamped, `pushed` moved by `push` along
+// `axis`. The shape memory runs at K = E h, where its positions do not depend on K.
+struct Push {
+  const Mesh* mesh = nullptr;  // the shape memory's
+  Mesh fem_mesh;               // the same nodes, cells the FEM takes
+  std::vector<int> held, pushed;
+  int axis = 2;
+  double push = 0.0;  // m, signed
+  fem::Material fem_material;
+  int load_steps = 1;
+  MaterialSpec lsm_material;  // stiffness: E h
+  bool volume_constraint = true;
+  double lsm_tolerance = 0.0;  // N
+  long max_iterations = 0;
+};
+
+struct Pushed {
+  fem::Result fem;
+  double fem_force = 0.0;        // N, |axis reaction| on the pushed nodes
+  double lsm_force_per_k = 0.0;  // N per N/m
+  Model lsm;                     // at K = E h
+  State lsm_state;               // its equilibrium
+  long lsm_iterations = 0;
+};
+
+Pushed push_both(const Push& p, const std::string& what) {
+  Pushed r;
+  fem::Problem problem;
+  problem.mesh = p.fem_mesh;
+  problem.material = p.fem_material;
+  problem.load_steps = p.load_steps;
+  for (int n : p.held)
+    for (int a = 0; a < 3; ++a) problem.prescribed.push_back({n, a, 0.0});
+  for (int n : p.pushed)
+    for (int a = 0; a < 3; ++a) problem.prescribed.push_back({n, a, a == p.axis ? p.push : 0.0});
+  r.fem = fem::solve_static(problem);
+  if (!r.fem.converged)
+    throw std::runtime_error(
+        fmt::format("calibration: the reference FEM {} did not converge: {}", what, r.fem.message));
+  r.fem_force = axis_force(r.fem.reaction, p.pushed, p.axis);
+
+  const int id = add_elastic_component(r.lsm, "calibrated", *p.mesh, p.lsm_material);
+  if (p.volume_constraint) add_volume_constraint(r.lsm, id);
+  Vec3 end = Vec3::Zero();
+  end[p.axis] = p.push;
+  add_prescribed_displacement(r.lsm,
+                              {p.held, {true, true, true}, Schedule::constant(Vec3::Zero())});
+  add_prescribed_displacement(
+      r.lsm, {p.pushed, {true, true, true}, Schedule{{0.0, 1.0}, {Vec3::Zero(), end}}});
+  r.lsm.settings.tolerance = p.lsm_tolerance;
+  r.lsm.settings.max_iterations = p.max_iterations;
+  finalize(r.lsm);
+  Simulator sim(r.lsm);
+  r.lsm_iterations = relax_or_throw(sim, 1.0, p.max_iterations, what).iterations;
+  r.lsm_force_per_k =
+      axis_force(sim.support_reactions(), p.pushed, p.axis) / p.lsm_material.stiffness;
+  r.lsm_state = sim.state();
+  return r;
+}
+
+}  // namespace
+
 Compression calibrate_compression(CellType type, int cells, const Options& o) {
   check_type(type);
   if (cells < 1) throw std::invalid_argument("calibration: cells must be >= 1");
@@ -83,53 +165,145 @@ Compression calibrate_compression(CellType type, int cells, const Options& o) {
   c.poisson = poisson_of(type, o);
   const Mesh mesh = make_box(Vec3::Constant(o.edge), {cells, cells, cells}, type);
   c.h = mean_edge_length(mesh);
-  const std::vector<int>& bottom = node_set(mesh, "bottom");
-  const std::vector<int>& top = node_set(mesh, "top");
-  const double push = o.strain * o.edge;  // m, downwards
 
-  // Reference FEM (Neo-Hookean; at 2 % strain practically linear).
-  fem::Problem problem;
-  problem.mesh = mesh;
-  problem.material = {fem::Law::neo_hookean, o.young, c.poisson};
-  problem.load_steps = 2;
-  for (int n : bottom)
-    for (int a = 0; a < 3; ++a) problem.prescribed.push_back({n, a, 0.0});
-  for (int n : top)
-    for (int a = 0; a < 3; ++a) problem.prescribed.push_back({n, a, a == 2 ? -push : 0.0});
-  const fem::Result solved = fem::solve_static(problem);
-  if (!solved.converged)
-    throw std::runtime_error("calibration: the reference FEM compression did not converge: " +
-                             solved.message);
-  c.fem_force = z_force(solved.reaction, top);
-  c.fem_newton_iterations = solved.newton_iterations;
-
-  // Shape memory at K = E h (alpha = 1): positions do not depend on K.
+  // Reference FEM Neo-Hookean (at 2 % strain practically linear).
+  Push p;
+  p.mesh = &mesh;
+  p.fem_mesh = mesh;
+  p.held = node_set(mesh, "bottom");
+  p.pushed = node_set(mesh, "top");
+  p.push = -o.strain * o.edge;
+  p.fem_material = {fem::Law::neo_hookean, o.young, c.poisson};
+  p.load_steps = 2;
   const double k1 = o.young * c.h;
-  Model model;
-  const int id = add_elastic_component(model, "cube", mesh, shape_memory_material(k1, o.density));
-  if (o.volume_constraint) add_volume_constraint(model, id);
-  add_prescribed_displacement(model,
-                              {bottom, {true, true, true}, Schedule::constant(Vec3::Zero())});
-  add_prescribed_displacement(
-      model, {top, {true, true, true}, Schedule{{0.0, 1.0}, {Vec3::Zero(), Vec3(0, 0, -push)}}});
-  model.settings.tolerance = o.tolerance * k1 * o.strain * c.h;
-  model.settings.max_iterations = o.max_iterations;
-  finalize(model);
-  Simulator sim(model);
-  c.lsm_iterations = relax_or_throw(sim, 1.0, o.max_iterations, "compression").iterations;
-  c.lsm_force_per_k = z_force(sim.support_reactions(), top) / k1;
+  p.lsm_material = shape_memory_material(k1, o.density);
+  p.volume_constraint = o.volume_constraint;
+  p.lsm_tolerance = o.tolerance * k1 * o.strain * c.h;
+  p.max_iterations = o.max_iterations;
+  const Pushed r = push_both(p, "compression");
+  c.fem_force = r.fem_force;
+  c.fem_newton_iterations = r.fem.newton_iterations;
+  c.lsm_iterations = r.lsm_iterations;
+  c.lsm_force_per_k = r.lsm_force_per_k;
   c.alpha = c.fem_force / (c.lsm_force_per_k * o.young * c.h);
+  std::tie(c.displacement_rms, c.displacement_max) =
+      displacement_difference(mesh.points, r.lsm_state.x, r.fem.displacement, -p.push);
 
   // Relaxed again with the calibrated K, from the equilibrium found (same positions).
-  Model calibrated = model;
+  Model calibrated = r.lsm;
   const double k = c.alpha * o.young * c.h;
   for (ShapeMemory& s : calibrated.shape_memory) s.stiffness = k;
   calibrated.settings.tolerance = o.tolerance * k * o.strain * c.h;
   Simulator check(calibrated);
-  check.state() = sim.state();
+  check.state() = r.lsm_state;
   c.lsm_iterations += relax_or_throw(check, 1.0, o.max_iterations, "compression").iterations;
-  c.lsm_force = z_force(check.support_reactions(), top);
+  c.lsm_force = axis_force(check.support_reactions(), p.pushed, 2);
   c.force_rel_diff = (c.lsm_force - c.fem_force) / c.fem_force;
+  return c;
+}
+
+namespace {
+
+// The cells the FEM takes: hexahedra and tetrahedra as they are, wedges cut into three
+// tetrahedra, every tetrahedron turned to a positive volume.
+Mesh fem_cells(const std::string& name, const Mesh& mesh) {
+  Mesh out;
+  out.points = mesh.points;
+  const auto add_tetra = [&](Cell t) {
+    const Vec3& a = out.points[size_t(t.nodes[0])];
+    const Vec3 ab = out.points[size_t(t.nodes[1])] - a, ac = out.points[size_t(t.nodes[2])] - a,
+               ad = out.points[size_t(t.nodes[3])] - a;
+    if (ab.cross(ac).dot(ad) < 0.0) std::swap(t.nodes[1], t.nodes[2]);
+    out.cells.push_back(t);
+  };
+  for (const Cell& cell : mesh.cells) {
+    if (cell.type == CellType::hexa)
+      out.cells.push_back(cell);
+    else if (cell.type == CellType::tetra)
+      add_tetra(cell);
+    else if (cell.type == CellType::wedge)
+      for (const Cell& t : wedge_tetrahedra(cell)) add_tetra(t);
+    else
+      throw std::invalid_argument(fmt::format(
+          "object '{}': 'young' calibrates K against finite elements, which need a volumetric "
+          "mesh (hexahedra, tetrahedra, wedges); this mesh has {} cells: give 'stiffness' instead",
+          name, cell_type_name(cell.type)));
+  }
+  return out;
+}
+
+// The nodes within `band` of the lowest (or highest) coordinate along `axis`, and at least
+// the `least` most extreme ones, so that a pointed end is still clamped on a triangle.
+std::vector<int> end_nodes(const Mesh& mesh, int axis, double band, bool lowest, size_t least) {
+  const auto key = [&](int n) {
+    const double x = mesh.points[size_t(n)][axis];
+    return lowest ? x : -x;
+  };
+  std::vector<int> order(mesh.points.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return key(a) < key(b); });
+  const double limit = key(order.front()) + band;
+  size_t count = 0;
+  while (count < order.size() && (count < least || key(order[count]) <= limit)) ++count;
+  order.resize(count);
+  std::sort(order.begin(), order.end());
+  return order;
+}
+
+}  // namespace
+
+StiffnessCalibration calibrate_object(const std::string& name, const Mesh& mesh,
+                                      const MaterialSpec& material, bool volume_constraint,
+                                      int axis, double strain) {
+  StiffnessCalibration c;
+  c.component = name;
+  c.young = material.young;
+  c.poisson = material.poisson;
+  c.axis = axis;
+  c.strain = strain;
+  Push p;
+  p.mesh = &mesh;
+  p.fem_mesh = fem_cells(name, mesh);
+  c.h = mean_edge_length(mesh);
+  p.axis = axis;
+  p.held = end_nodes(mesh, axis, c.h / 4, true, 4);
+  p.pushed = end_nodes(mesh, axis, c.h / 4, false, 4);
+  std::vector<int> shared;
+  std::set_intersection(p.held.begin(), p.held.end(), p.pushed.begin(), p.pushed.end(),
+                        std::back_inserter(shared));
+  if (!shared.empty())
+    throw std::invalid_argument(fmt::format(
+        "object '{}': too thin along {} to calibrate K by compressing it (its two ends share "
+        "node {}): choose another 'calibration_axis' or give 'stiffness'",
+        name, "xyz"[axis], shared.front()));
+  c.held = int(p.held.size());
+  c.pushed = int(p.pushed.size());
+  double low = mesh.points.front()[axis], high = low;
+  for (const Vec3& x : mesh.points) {
+    low = std::min(low, x[axis]);
+    high = std::max(high, x[axis]);
+  }
+  const double extent = high - low;
+  c.push = strain * extent;
+  p.push = -c.push;
+  p.fem_material = {fem::Law::linear, material.young, material.poisson};
+  p.load_steps = 1;
+  const double k1 = material.young * c.h;
+  p.lsm_material = material;
+  p.lsm_material.model = ElasticModel::shape_memory;
+  p.lsm_material.stiffness = k1;
+  p.volume_constraint = volume_constraint;
+  const Options defaults;
+  p.lsm_tolerance = defaults.tolerance * k1 * strain * c.h;
+  p.max_iterations = defaults.max_iterations;
+  const Pushed r = push_both(p, fmt::format("compression of object '{}'", name));
+  c.fem_force = r.fem_force;
+  c.fem_newton_iterations = r.fem.newton_iterations;
+  c.lsm_iterations = r.lsm_iterations;
+  c.stiffness = r.fem_force / r.lsm_force_per_k;
+  c.alpha = c.stiffness / (material.young * c.h);
+  std::tie(c.displacement_rms, c.displacement_max) =
+      displacement_difference(mesh.points, r.lsm_state.x, r.fem.displacement, c.push);
   return c;
 }
 
@@ -178,6 +352,8 @@ Cantilever check_cantilever(CellType type, int cells, double alpha, const Option
   c.lsm_iterations = relax_or_throw(sim, 1.0, o.max_iterations, "cantilever").iterations;
   for (int node : tip)
     c.lsm_tip -= (sim.state().x[node] - mesh.points[node]).z() / double(tip.size());
+  std::tie(c.displacement_rms, c.displacement_max) =
+      displacement_difference(mesh.points, sim.state().x, solved.displacement, c.fem_tip);
 
   const double L = o.beam.x(), b = o.beam.y(), t = o.beam.z();
   const double q = o.density * o.gravity * b * t;  // N/m
@@ -217,21 +393,22 @@ std::string table(const Result& r) {
         "Check: {:g} x {:g} x {:g} mm cantilever under gravity, rho {:g} kg/m^3, E {:g} kPa; tip "
         "= mean downward displacement of the free end.\n",
         o.beam.x() * 1e3, o.beam.y() * 1e3, o.beam.z() * 1e3, o.density, o.beam_young * 1e-3);
-  s += fmt::format("\n{:<6} {:>5} {:>7} {:>10} {:>10} {:>8} {:>9}", "mesh", "cells", "h mm",
-                   "F_fem N", "F_lsm N", "alpha", "dF %");
+  s += fmt::format("\n{:<6} {:>5} {:>7} {:>10} {:>10} {:>8} {:>9} {:>7}", "mesh", "cells", "h mm",
+                   "F_fem N", "F_lsm N", "alpha", "dF %", "du %");
   if (o.cantilever)
-    s += fmt::format(" {:>10} {:>10} {:>10} {:>8}", "tip_fem mm", "tip_lsm mm", "tip_EB mm",
-                     "dtip %");
+    s += fmt::format(" {:>10} {:>10} {:>10} {:>8} {:>7}", "tip_fem mm", "tip_lsm mm", "tip_EB mm",
+                     "dtip %", "du %");
   s += '\n';
   for (const Row& row : r.rows) {
     const Compression& c = row.compression;
-    s += fmt::format("{:<6} {:>5} {:>7.3f} {:>10.4g} {:>10.4g} {:>8.4f} {:>9.2e}",
+    s += fmt::format("{:<6} {:>5} {:>7.3f} {:>10.4g} {:>10.4g} {:>8.4f} {:>9.2e} {:>7.1f}",
                      cell_type_name(c.type), c.cells, c.h * 1e3, c.fem_force, c.lsm_force, c.alpha,
-                     c.force_rel_diff * 100);
+                     c.force_rel_diff * 100, c.displacement_rms * 100);
     if (o.cantilever) {
       const Cantilever& t = row.cantilever;
-      s += fmt::format(" {:>10.4f} {:>10.4f} {:>10.4f} {:>8.1f}", t.fem_tip * 1e3, t.lsm_tip * 1e3,
-                       t.euler_bernoulli_tip * 1e3, t.tip_rel_diff * 100);
+      s += fmt::format(" {:>10.4f} {:>10.4f} {:>10.4f} {:>8.1f} {:>7.1f}", t.fem_tip * 1e3,
+                       t.lsm_tip * 1e3, t.euler_bernoulli_tip * 1e3, t.tip_rel_diff * 100,
+                       t.displacement_rms * 100);
     }
     s += '\n';
   }
@@ -255,16 +432,17 @@ std::string json(const Result& r) {
     s += fmt::format(
         "{}\n    {{\"type\": \"{}\", \"cells\": {}, \"h\": {}, \"poisson\": {}, \"fem_force\": {}, "
         "\"lsm_force_per_k\": {}, \"alpha\": {}, \"lsm_force\": {}, \"force_rel_diff\": {}, "
-        "\"lsm_iterations\": {}",
+        "\"lsm_iterations\": {}, \"displacement_rms\": {}, \"displacement_max\": {}",
         i ? "," : "", cell_type_name(c.type), c.cells, c.h, c.poisson, c.fem_force,
-        c.lsm_force_per_k, c.alpha, c.lsm_force, c.force_rel_diff, c.lsm_iterations);
+        c.lsm_force_per_k, c.alpha, c.lsm_force, c.force_rel_diff, c.lsm_iterations,
+        c.displacement_rms, c.displacement_max);
     if (o.cantilever)
       s += fmt::format(
           ", \"cantilever\": {{\"h\": {}, \"stiffness\": {}, \"fem_tip\": {}, \"lsm_tip\": {}, "
           "\"euler_bernoulli_tip\": {}, \"tip_ratio\": {}, \"tip_rel_diff\": {}, "
-          "\"lsm_iterations\": {}}}",
+          "\"lsm_iterations\": {}, \"displacement_rms\": {}, \"displacement_max\": {}}}",
           t.h, t.stiffness, t.fem_tip, t.lsm_tip, t.euler_bernoulli_tip, t.tip_ratio,
-          t.tip_rel_diff, t.lsm_iterations);
+          t.tip_rel_diff, t.lsm_iterations, t.displacement_rms, t.displacement_max);
     s += '}';
   }
   s += "\n  ]\n}\n";

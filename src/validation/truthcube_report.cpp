@@ -27,15 +27,15 @@ std::string table(const Study& study, const StudyOptions& o) {
       o.frame == FrameMode::polar ? "polar" : "frame", o.reaction ? "on" : "off",
       o.volume_constraint ? "on" : "off", o.young / 1e3, o.poisson);
   s << "strain  model  mean err  max err  eq.(1) mean  sum ratio  eq.(1) translated  "
-       "paper Phymul  paper ANSYS\n";
+       "paper Phymul  paper ANSYS  plate force\n";
   for (const LevelResult& r : study.results) {
     const Metrics& m = r.metrics;
     s << fmt::format(
         "{:5.2f}%  {:5}  {:5.2f} mm  {:5.2f} mm  {:9.1f} %  {:7.1f} %  {:15.1f} %  "
-        "{:10.1f} %  {:9.1f} %\n",
+        "{:10.1f} %  {:9.1f} %  {:9.3f} N\n",
         100 * kStrain[r.level], r.model, m.mean_error_mm, m.max_error_mm, m.mean_relative_error_pct,
         m.sum_ratio_pct, m.mean_relative_error_pct_translated, kPaperPhymul[r.level],
-        kPaperAnsys[r.level]);
+        kPaperAnsys[r.level], r.plate_force);
   }
   return s.str();
 }

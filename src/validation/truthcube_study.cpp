@@ -3,6 +3,7 @@
 #include <chrono>
 #include <stdexcept>
 
+#include "phymul/calibration.hpp"
 #include "phymul/simulator.hpp"
 #include "phymul/truthcube.hpp"
 #include "validation/truthcube_models.hpp"
@@ -41,6 +42,15 @@ void run_shape_memory(const Study& study, const std::vector<Bead>& beads,
     add_prescribed_displacement(
         model, {{plates.on_x_line}, {false, true, true}, Schedule::constant(Vec3::Zero())});
   }
+  // The plate force at the K a scene giving E would get (calibrate_object); positions and
+  // forces per unit K do not depend on the K relaxed with.
+  MaterialSpec tissue = material;
+  tissue.young = options.young;
+  tissue.poisson = options.poisson;
+  const double force_scale =
+      calibration::calibrate_object("cube", study.mesh, tissue, options.volume_constraint)
+          .stiffness /
+      material.stiffness;
   model.settings.tolerance = options.tolerance * material.stiffness * (kEdge / options.cells);
   model.settings.max_iterations = 400000;
   model.settings.mode = SolveMode::static_equilibrium;  // relaxation masses (Simulator)
@@ -62,6 +72,9 @@ void run_shape_memory(const Study& study, const std::vector<Bead>& beads,
                                  std::to_string(l + 1));
     }
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const std::vector<Vec3> reaction = sim.support_reactions();
+    for (int n : plates.plate) r.plate_force += reaction[size_t(n)].z();
+    r.plate_force = std::abs(r.plate_force) * force_scale;
     r.positions = sim.state().x;
     r.beads = embedding.apply(r.positions);
     r.metrics = compare(beads, l, r.beads);
