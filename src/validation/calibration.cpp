@@ -145,6 +145,8 @@ Pushed push_both(const Push& p, const std::string& what) {
       r.lsm, {p.pushed, {true, true, true}, Schedule{{0.0, 1.0}, {Vec3::Zero(), end}}});
   r.lsm.settings.tolerance = p.lsm_tolerance;
   r.lsm.settings.max_iterations = p.max_iterations;
+  r.lsm.settings.mode = SolveMode::static_equilibrium;  // relaxation masses (Simulator)
+  r.lsm.settings.relaxation = Relaxation::fire;         // no contact to stall it
   finalize(r.lsm);
   Simulator sim(r.lsm);
   r.lsm_iterations = relax_or_throw(sim, 1.0, p.max_iterations, what).iterations;
