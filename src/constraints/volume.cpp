@@ -59,15 +59,19 @@ bool gathered(const VolumeConstraint& c) { return c.incident_start.size() == c.n
 
 // 6 dV/dx at c.nodes[k], summed over its triangles in the order the triangles' scatter adds
 // them (the same bits), so that each node is one thread's: parallel and independent of the
-// thread count.
-[[gnu::always_inline]] inline Vec3 six_gradient_at(const VolumeConstraint& c, std::span<const Vec3> x, size_t k) {
-  Vec3 g = Vec3::Zero();
-  for (int e = c.incident_start[k]; e < c.incident_start[k + 1]; ++e) {
-    const std::array<int, 2>& pair = c.incident[size_t(e)];
-    g += x[pair[0]].cross(x[pair[1]]);
+// thread count. Plain pointers, which the stores into the gradient cannot move.
+struct FaceGather {
+  const int* __restrict start;
+  const std::array<int, 2>* __restrict pair;
+  const Vec3* __restrict x;
+  FaceGather(const VolumeConstraint& c, std::span<const Vec3> positions)
+      : start(c.incident_start.data()), pair(c.incident.data()), x(positions.data()) {}
+  [[gnu::always_inline]] Vec3 six_gradient_at(int k) const {
+    Vec3 g = Vec3::Zero();
+    for (int e = start[k]; e < start[k + 1]; ++e) g += x[pair[e][0]].cross(x[pair[e][1]]);
+    return g;
   }
-  return g;
-}
+};
 
 // The triangles' scatter, for a constraint finalize did not index.
 void scatter_volume_gradient(const VolumeConstraint& c, std::span<const Vec3> x,
@@ -86,12 +90,16 @@ void scatter_volume_gradient(const VolumeConstraint& c, std::span<const Vec3> x,
 void weighted_volume_gradient(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
                               std::span<const Vec3> x, std::span<Vec3> grad) {
   const int n = int(c.nodes.size());
-  if (!gathered(c)) scatter_volume_gradient(c, x, grad);
+  const bool gather = gathered(c);
+  if (!gather) scatter_volume_gradient(c, x, grad);
+  const FaceGather faces(c, x);
+  const int* __restrict nodes = c.nodes.data();
+  Vec3* __restrict out = grad.data();
 #pragma omp parallel for schedule(static) if (n >= kParallelFrom)
   for (int k = 0; k < n; ++k) {
-    const int i = c.nodes[size_t(k)];
-    const Vec3 g = gathered(c) ? Vec3(six_gradient_at(c, x, size_t(k)) / 6.0) : grad[i];
-    grad[i] = g.cwiseProduct(inverse_mass[i]);
+    const int i = nodes[k];
+    const Vec3 g = gather ? Vec3(faces.six_gradient_at(k) / 6.0) : out[i];
+    out[i] = g.cwiseProduct(inverse_mass[i]);
   }
 }
 
@@ -128,7 +136,7 @@ void volume_gradient(const VolumeConstraint& c, std::span<const Vec3> x, std::sp
   if (!gathered(c)) return scatter_volume_gradient(c, x, grad);
   const int n = int(c.nodes.size());
 #pragma omp parallel for schedule(static) if (n >= kParallelFrom)
-  for (int k = 0; k < n; ++k) grad[c.nodes[size_t(k)]] = six_gradient_at(c, x, size_t(k)) / 6.0;
+  for (int k = 0; k < n; ++k) grad[c.nodes[size_t(k)]] = FaceGather(c, x).six_gradient_at(k) / 6.0;
 }
 
 double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
@@ -186,19 +194,22 @@ void project_volumes(const Model& model, std::span<Vec3> x, double load_time,
 namespace {
 
 // One pass of the velocity projection on one constraint. Returns the removed rate dV/dt
-// relative to sum |g_i| |v_i|, for the sweeps' stopping test.
+// relative to sum |g_i| |v_i|, for the sweeps' stopping test (0 without sweeps, which need no
+// square roots).
 double remove_volume_rate(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
-                          std::span<const Vec3> x, std::span<Vec3> v, std::span<Vec3> grad) {
+                          std::span<const Vec3> x, std::span<Vec3> v, std::span<Vec3> grad,
+                          bool sweeps) {
   const bool gather = gathered(c);  // the gradient in the sums' pass
   if (!gather) scatter_volume_gradient(c, x, grad);
+  const FaceGather faces(c, x);
   const int n = int(c.nodes.size());
   // dV/dt, g.W.g and g.g-weighted |v|
   const auto [rate, weight, speed] = ordered_sums<3>(n, [&](int k, auto& sums) {
     const int i = c.nodes[size_t(k)];
-    if (gather) grad[i] = six_gradient_at(c, x, size_t(k)) / 6.0;
+    if (gather) grad[i] = faces.six_gradient_at(k) / 6.0;
     sums[0] += grad[i].dot(v[i]);
     sums[1] += grad[i].dot(grad[i].cwiseProduct(inverse_mass[i]));
-    sums[2] += grad[i].norm() * v[i].norm();
+    if (sweeps) sums[2] += grad[i].norm() * v[i].norm();
   });
   if (weight == 0.0) return 0.0;
   const double mu = rate / weight;
@@ -222,7 +233,8 @@ void project_volume_velocities(const Model& model, std::span<const Vec3> x, std:
   for (int sweep = 0; sweep < kMaxSweeps; ++sweep) {
     double worst = 0.0;
     for (const VolumeConstraint& c : model.volumes)
-      worst = std::max(worst, remove_volume_rate(c, model.inverse_mass, x, v, grad));
+      worst = std::max(
+          worst, remove_volume_rate(c, model.inverse_mass, x, v, grad, model.coupled_volumes));
     if (!model.coupled_volumes || worst <= kConverged) return;
   }
 }
