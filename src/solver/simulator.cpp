@@ -187,20 +187,7 @@ void Simulator::checked_step(double time, double previous_load) {
 // correction over dt (the reaction of the constraint).
 void Simulator::step_verlet(double h, double load_time) {
   State& s = state_;
-  if (model_.doubled.rows() > 0 || !model_.rigid_bodies.empty()) {
-    std::vector<Vec3>& a = f_start_;  // accelerations, tangent to the volume constraints
-    accelerations(a, x_start_);       // x_start_ is filled below
-    kick_rigid_bodies(model_, s, h);
-    const int n = model_.node_count();
-#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
-    for (int i = 0; i < n; ++i) {
-      x_start_[i] = s.x[i];
-      v_start_[i] = s.v[i];  // the last good state, if the step fails its checks
-      s.x[i] += h * (s.v[i] + 0.5 * h * a[i]);
-    }
-  } else {
-    drift(h);
-  }
+  drift(h);  // the first half kick too
   drift_rigid_bodies(model_, s, h, load_time);
   ContactStep contact = begin_contact_step(h);
   apply_position_constraints(model_, s.x, load_time, f_start_, contact);  // a is spent
@@ -249,23 +236,27 @@ void Simulator::accelerations(std::vector<Vec3>& a, std::span<Vec3> volume_scrat
   project_doubled(model_, a);
 }
 
-// The first half kick and the drift, x += h (v + h/2 a), in one pass over the nodes where
-// nothing but the volume constraints changes the accelerations (no doubled groups, no rigid
-// bodies): their surface nodes' accelerations are projected first, and those nodes moved
-// again with them after the pass, by the same expression.
+// The first half kick and the drift, x += h (v + h/2 a), in one pass over the nodes. The
+// nodes whose accelerations the constraints change (volume surfaces, doubled groups) get
+// them projected first, and are moved again after the pass by the same expression. Rigid
+// bodies are kicked first: their nodes' accelerations are zero (no free axis).
 void Simulator::drift(double h) {
   State& s = state_;
   const int n = model_.node_count();
   const double c = model_.damping;
-  for (const VolumeConstraint& vc : model_.volumes) {
-    const int m = int(vc.nodes.size());
+  kick_rigid_bodies(model_, s, h);
+  auto constrained_accelerations = [&](std::span<const int> nodes) {
+    const int m = int(nodes.size());
 #pragma omp parallel for schedule(static) if (m >= kParallelFrom)
     for (int k = 0; k < m; ++k) {
-      const int i = vc.nodes[size_t(k)];
+      const int i = nodes[size_t(k)];
       f_start_[i] = acceleration(model_.inverse_mass[i], s.f[i], s.v[i], c);
     }
-  }
+  };
+  for (const VolumeConstraint& vc : model_.volumes) constrained_accelerations(vc.nodes);
+  for (int g = 0; g < model_.doubled.rows(); ++g) constrained_accelerations(model_.doubled.row(g));
   if (!model_.volumes.empty()) project_volume_velocities(model_, s.x, f_start_, x_start_);
+  project_doubled(model_, f_start_);
   // Plain pointers: the vectors' own would be reloaded after every store.
   Vec3* __restrict x = s.x.data(), * __restrict x0 = x_start_.data(), * __restrict v0 = v_start_.data();
   const Vec3 *__restrict v = s.v.data(), *__restrict f = s.f.data(),
@@ -276,29 +267,23 @@ void Simulator::drift(double h) {
     v0[i] = v[i];  // the last good state, if the step fails its checks
     x[i] += h * (v[i] + 0.5 * h * acceleration(w[i], f[i], v[i], c));
   }
-  for (const VolumeConstraint& vc : model_.volumes) {
-    const int m = int(vc.nodes.size());
+  auto move_again = [&](std::span<const int> nodes) {
+    const int m = int(nodes.size());
 #pragma omp parallel for schedule(static) if (m >= kParallelFrom)
     for (int k = 0; k < m; ++k) {
-      const int i = vc.nodes[size_t(k)];
+      const int i = nodes[size_t(k)];
       s.x[i] = x_start_[i] + h * (v_start_[i] + 0.5 * h * f_start_[i]);
     }
-  }
+  };
+  for (const VolumeConstraint& vc : model_.volumes) move_again(vc.nodes);
+  for (int g = 0; g < model_.doubled.rows(); ++g) move_again(model_.doubled.row(g));
 }
 
-// v = (x - x_start) / h, then the half kick v += h/2 a(f, v): one pass over the nodes where
-// no doubled group has to share its accelerations first.
+// v = (x - x_start) / h, then the half kick v += h/2 a(f, v), in one pass; doubled groups
+// share their accelerations after it and are kicked again by the same expression.
 void Simulator::half_kick_from_positions(double h) {
   State& s = state_;
   const int n = model_.node_count();
-  if (model_.doubled.rows() > 0) {
-#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
-    for (int i = 0; i < n; ++i) s.v[i] = (s.x[i] - x_start_[i]) / h;
-    accelerations(f_start_, /*volume_scratch=*/{});
-#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
-    for (int i = 0; i < n; ++i) s.v[i] += 0.5 * h * f_start_[i];
-    return;
-  }
   const double c = model_.damping;
   Vec3* __restrict v = s.v.data();
   const Vec3 *__restrict x = s.x.data(), *__restrict x0 = x_start_.data(),
@@ -308,6 +293,13 @@ void Simulator::half_kick_from_positions(double h) {
     const Vec3 moved = (x[i] - x0[i]) / h;
     v[i] = moved + 0.5 * h * acceleration(w[i], f[i], moved, c);
   }
+  if (model_.doubled.rows() == 0) return;
+  for (int g = 0; g < model_.doubled.rows(); ++g)
+    for (int i : model_.doubled.row(g))
+      f_start_[i] = acceleration(w[i], f[i], (x[i] - x0[i]) / h, c);
+  project_doubled(model_, f_start_);
+  for (int g = 0; g < model_.doubled.rows(); ++g)
+    for (int i : model_.doubled.row(g)) v[i] = (x[i] - x0[i]) / h + 0.5 * h * f_start_[i];
 }
 
 // The paper's Newton-Cotes family: an Euler predictor, then the trapezoid rule on the
