@@ -74,6 +74,11 @@ struct VolumeConstraint {
   // Scratch of the joint projection of surfaces sharing nodes (sized by finalize then only):
   // w_i dV/dx_i per node of `nodes` at the projection's start.
   mutable std::vector<Vec3> coupled_direction;
+  // The gradient's gather (finalize): for nodes[k], the two other corners of each triangle
+  // around it, in triangle order and the triangle's cyclic order, at
+  // [incident_start[k], incident_start[k + 1]) of incident. Empty: the triangles' scatter.
+  std::vector<int> incident_start;
+  std::vector<std::array<int, 2>> incident;
 };
 
 struct AppliedForce {

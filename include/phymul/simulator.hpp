@@ -112,6 +112,8 @@ class Simulator {
   // Tangent to the volume constraints unless volume_scratch (their gradients, node count) is
   // empty.
   void accelerations(std::vector<Vec3>& a, std::span<Vec3> volume_scratch);
+  void drift(double h);
+  void half_kick_from_positions(double h);
   void find_obstacle_contacts();  // fills contacts_ at the current positions
   // Takes out of r what the obstacles in contacts_ can balance (call find_obstacle_contacts).
   void remove_contact_forces(std::vector<Vec3>& r) const;

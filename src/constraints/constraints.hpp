@@ -11,6 +11,10 @@ namespace phymul {
 // nodes get their rest coordinates bit for bit.
 void apply_prescribed(const Model& model, std::span<Vec3> x, double load_time);
 
+// Indexes the triangles around each node of c (finalize), so that its gradient is gathered
+// node by node, in parallel, rather than scattered from the triangles.
+void index_volume_faces(VolumeConstraint& c);
+
 // Volume gradient dV/dx_i (m^2) of a closed surface, accumulated into grad (zeroed first on
 // the constraint's nodes).
 void volume_gradient(const VolumeConstraint& c, std::span<const Vec3> x, std::span<Vec3> grad);

@@ -1,9 +1,11 @@
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
+#include <vector>
 
 #include "constraints/constraints.hpp"
 #include "constraints/coupled_volume.hpp"
@@ -53,23 +55,88 @@ std::array<double, 4> volume_cubic(const VolumeConstraint& c, std::span<const Ve
   return k;
 }
 
-}  // namespace
+bool gathered(const VolumeConstraint& c) { return c.incident_start.size() == c.nodes.size() + 1; }
 
-void volume_gradient(const VolumeConstraint& c, std::span<const Vec3> x, std::span<Vec3> grad) {
-  // The factor 1/6 once per node rather than three times per triangle (a node has about six
-  // triangles): 9 divisions per triangle saved; rounded once, the sum is as accurate.
-  // The triangles' scatter stays on one thread (triangles sharing a node would race).
-  const int n = int(c.nodes.size());
-#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
-  for (int k = 0; k < n; ++k) grad[c.nodes[size_t(k)]].setZero();
+// 6 dV/dx at c.nodes[k], summed over its triangles in the order the triangles' scatter adds
+// them (the same bits), so that each node is one thread's: parallel and independent of the
+// thread count. Plain pointers, which the stores into the gradient cannot move.
+struct FaceGather {
+  const int* __restrict start;
+  const std::array<int, 2>* __restrict pair;
+  const Vec3* __restrict x;
+  FaceGather(const VolumeConstraint& c, std::span<const Vec3> positions)
+      : start(c.incident_start.data()), pair(c.incident.data()), x(positions.data()) {}
+  [[gnu::always_inline]] Vec3 six_gradient_at(int k) const {
+    Vec3 g = Vec3::Zero();
+    for (int e = start[k]; e < start[k + 1]; ++e) g += x[pair[e][0]].cross(x[pair[e][1]]);
+    return g;
+  }
+};
+
+// The triangles' scatter, for a constraint finalize did not index.
+void scatter_volume_gradient(const VolumeConstraint& c, std::span<const Vec3> x,
+                             std::span<Vec3> grad) {
+  for (int i : c.nodes) grad[i].setZero();
   for (const Triangle& t : c.triangles) {
     const Vec3 &a = x[t[0]], &b = x[t[1]], &d = x[t[2]];
     grad[t[0]] += b.cross(d);
     grad[t[1]] += d.cross(a);
     grad[t[2]] += a.cross(b);
   }
+  for (int i : c.nodes) grad[i] /= 6.0;
+}
+
+// w_i dV/dx_i into grad on the constraint's nodes: the projection's direction.
+void weighted_volume_gradient(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
+                              std::span<const Vec3> x, std::span<Vec3> grad) {
+  const int n = int(c.nodes.size());
+  const bool gather = gathered(c);
+  if (!gather) scatter_volume_gradient(c, x, grad);
+  const FaceGather faces(c, x);
+  const int* __restrict nodes = c.nodes.data();
+  Vec3* __restrict out = grad.data();
 #pragma omp parallel for schedule(static) if (n >= kParallelFrom)
-  for (int k = 0; k < n; ++k) grad[c.nodes[size_t(k)]] /= 6.0;
+  for (int k = 0; k < n; ++k) {
+    const int i = nodes[k];
+    const Vec3 g = gather ? Vec3(faces.six_gradient_at(k) / 6.0) : out[i];
+    out[i] = g.cwiseProduct(inverse_mass[i]);
+  }
+}
+
+}  // namespace
+
+void index_volume_faces(VolumeConstraint& c) {
+  c.incident_start.clear();
+  c.incident.clear();
+  const size_t n = c.nodes.size();
+  std::vector<int> start(n + 1, 0);
+  auto local = [&](int node) {
+    const auto at = std::lower_bound(c.nodes.begin(), c.nodes.end(), node);
+    return at != c.nodes.end() && *at == node ? size_t(at - c.nodes.begin()) : n;
+  };
+  for (const Triangle& t : c.triangles)
+    for (int node : t) {
+      const size_t k = local(node);
+      if (k == n) return;  // a corner outside `nodes`: keep the scatter
+      ++start[k + 1];
+    }
+  for (size_t k = 0; k < n; ++k) start[k + 1] += start[k];
+  std::vector<std::array<int, 2>> incident(size_t(start.back()));
+  std::vector<int> next(start.begin(), start.end() - 1);
+  for (const Triangle& t : c.triangles)  // in triangle order: the scatter's order of sums
+    for (int p = 0; p < 3; ++p)
+      incident[size_t(next[local(t[size_t(p)])]++)] = {t[size_t(p + 1) % 3], t[size_t(p + 2) % 3]};
+  c.incident_start = std::move(start);
+  c.incident = std::move(incident);
+}
+
+void volume_gradient(const VolumeConstraint& c, std::span<const Vec3> x, std::span<Vec3> grad) {
+  // The factor 1/6 once per node rather than three times per triangle (a node has about six
+  // triangles): 9 divisions per triangle saved; rounded once, the sum is as accurate.
+  if (!gathered(c)) return scatter_volume_gradient(c, x, grad);
+  const int n = int(c.nodes.size());
+#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
+  for (int k = 0; k < n; ++k) grad[c.nodes[size_t(k)]] = FaceGather(c, x).six_gradient_at(k) / 6.0;
 }
 
 double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
@@ -80,13 +147,8 @@ double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_m
 double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
                       std::span<Vec3> x, std::span<Vec3> grad, double target,
                       double* relative_error_before) {
-  volume_gradient(c, x, grad);
+  weighted_volume_gradient(c, inverse_mass, x, grad);  // direction d
   const int n = int(c.nodes.size());
-#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
-  for (int k = 0; k < n; ++k) {  // direction d
-    const int i = c.nodes[size_t(k)];
-    grad[i] = grad[i].cwiseProduct(inverse_mass[i]);
-  }
   const auto k = volume_cubic(c, x, grad);
   if (relative_error_before) *relative_error_before = std::abs(k[0] - target) / std::abs(target);
   if (k[0] == target) return 0.0;
@@ -132,17 +194,22 @@ void project_volumes(const Model& model, std::span<Vec3> x, double load_time,
 namespace {
 
 // One pass of the velocity projection on one constraint. Returns the removed rate dV/dt
-// relative to sum |g_i| |v_i|, for the sweeps' stopping test.
+// relative to sum |g_i| |v_i|, for the sweeps' stopping test (0 without sweeps, which need no
+// square roots).
 double remove_volume_rate(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
-                          std::span<const Vec3> x, std::span<Vec3> v, std::span<Vec3> grad) {
-  volume_gradient(c, x, grad);
+                          std::span<const Vec3> x, std::span<Vec3> v, std::span<Vec3> grad,
+                          bool sweeps) {
+  const bool gather = gathered(c);  // the gradient in the sums' pass
+  if (!gather) scatter_volume_gradient(c, x, grad);
+  const FaceGather faces(c, x);
   const int n = int(c.nodes.size());
   // dV/dt, g.W.g and g.g-weighted |v|
   const auto [rate, weight, speed] = ordered_sums<3>(n, [&](int k, auto& sums) {
     const int i = c.nodes[size_t(k)];
+    if (gather) grad[i] = faces.six_gradient_at(k) / 6.0;
     sums[0] += grad[i].dot(v[i]);
     sums[1] += grad[i].dot(grad[i].cwiseProduct(inverse_mass[i]));
-    sums[2] += grad[i].norm() * v[i].norm();
+    if (sweeps) sums[2] += grad[i].norm() * v[i].norm();
   });
   if (weight == 0.0) return 0.0;
   const double mu = rate / weight;
@@ -166,7 +233,8 @@ void project_volume_velocities(const Model& model, std::span<const Vec3> x, std:
   for (int sweep = 0; sweep < kMaxSweeps; ++sweep) {
     double worst = 0.0;
     for (const VolumeConstraint& c : model.volumes)
-      worst = std::max(worst, remove_volume_rate(c, model.inverse_mass, x, v, grad));
+      worst = std::max(
+          worst, remove_volume_rate(c, model.inverse_mass, x, v, grad, model.coupled_volumes));
     if (!model.coupled_volumes || worst <= kConverged) return;
   }
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "constraints/constraints.hpp"
 #include "constraints/doubled.hpp"
 #include "forces/explicit_fem.hpp"
 #include "forces/shape_memory.hpp"
@@ -232,6 +233,7 @@ void finalize(Model& model) {
   finalize_rigid_bodies(model);
   finalize_doubled(model);
   mark_coupled_volumes(model);
+  for (VolumeConstraint& c : model.volumes) index_volume_faces(c);
 }
 
 State make_state(const Model& model) {

@@ -68,8 +68,7 @@ bool surely_no_runaway(std::span<const double> edges, std::span<const Vec3> befo
     largest = std::max(largest, step2);
     shortest = std::min(shortest, edges[i]);
   }
-  const double bound = kRunawayFraction * shortest;
-  return finite && 4.0 * largest < (1.0 - 1e-6) * bound * bound;
+  return finite && steps_surely_within_bound(largest, shortest);
 }
 
 }  // namespace

@@ -28,6 +28,14 @@ struct Runaway {
   double edge;   // m, the node's shortest rest edge
 };
 
+// No node can have run away when the largest squared step of any node in it (finite) is
+// below a quarter of the squared bound of the shortest edge: a node and its neighbours' mean
+// then moved less than the bound apart.
+inline bool steps_surely_within_bound(double largest_step2, double shortest_edge) {
+  const double bound = kRunawayFraction * shortest_edge;
+  return 4.0 * largest_step2 < (1.0 - 1e-6) * bound * bound;
+}
+
 // Compares the positions before and after one step; allocation-free.
 std::optional<Runaway> find_runaway(const Model& model, std::span<const double> edges,
                                     std::span<const Vec3> before, std::span<const Vec3> after);
