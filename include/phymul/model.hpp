@@ -74,6 +74,9 @@ struct VolumeConstraint {
   // Scratch of the joint projection of surfaces sharing nodes (sized by finalize then only):
   // w_i dV/dx_i per node of `nodes` at the projection's start.
   mutable std::vector<Vec3> coupled_direction;
+  // The joint velocity projection's 6 dV/dx per node of `nodes`, and the positions it was
+  // taken at: a step's last projection and the next step's first share them.
+  mutable std::vector<Vec3> coupled_gradient, coupled_at;
 };
 
 struct AppliedForce {
@@ -202,6 +205,10 @@ struct Model {
   // position constraint holds it. The projection of global constraints moves nodes by it.
   std::vector<Vec3> inverse_mass;
   bool coupled_volumes = false;  // some node lies on two volume constraints (set by finalize)
+  // The joint velocity projection's Cholesky factor of G W G^T (sized by finalize), valid
+  // while coupled_at matches the positions and no other projection wrote the directions.
+  mutable std::vector<double> coupled_factor;
+  mutable bool coupled_factor_valid = false;
   Vec3 gravity = Vec3::Zero();   // m/s^2
   double damping = 0.0;          // 1/s
   SimulationSpec settings;

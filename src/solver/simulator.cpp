@@ -76,6 +76,9 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
     scale_masses_to(*model_.settings.mass_scaling_dt);
     if (!inertia_.empty()) stable = stable_time_step(model_, inertia_);
   }
+  if (model_.settings.dt_estimate == DtEstimate::power)  // the inertias the steps use
+    stable = verlet_stable_step(highest_frequency(model_, state_, inertia()).omega(),
+                                model_.damping);
   stable_dt_ = stable;
   dt_ = model_.settings.dt ? *model_.settings.dt : model_.settings.dt_safety * stable;
   if (!std::isfinite(dt_)) dt_ = 1e-3;  // no stiffness at all: any step is stable
