@@ -209,8 +209,8 @@ struct Model {
   // while coupled_at matches the positions and no other projection wrote the directions.
   mutable std::vector<double> coupled_factor;
   mutable bool coupled_factor_valid = false;
-  Vec3 gravity = Vec3::Zero();   // m/s^2
-  double damping = 0.0;          // 1/s
+  Vec3 gravity = Vec3::Zero();  // m/s^2
+  double damping = 0.0;         // 1/s
   SimulationSpec settings;
 
   int node_count() const { return int(rest_position.size()); }

@@ -52,7 +52,7 @@ struct SimulationSpec {
   std::optional<double> dt;  // s; nullopt = "auto"
   double dt_safety = 0.5;    // fraction of the stability limit used by dt: auto
   DtEstimate dt_estimate = DtEstimate::gershgorin;  // that limit's estimate
-  double duration = 1.0;     // s (static: the schedules are evaluated at its end)
+  double duration = 1.0;  // s (static: the schedules are evaluated at its end)
   Integrator integrator = Integrator::verlet;
   SolveMode mode = SolveMode::dynamic;
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  // m/s^2

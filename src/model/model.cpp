@@ -58,8 +58,8 @@ void mark_coupled_volumes(Model& model) {
     c.coupled_gradient.assign(size, Vec3::Zero());
     c.coupled_at.assign(size, Vec3::Zero());
   }
-  model.coupled_factor.assign(model.coupled_volumes ? size_t(kMaxJointVolumes * kMaxJointVolumes) : 0,
-                              0.0);
+  model.coupled_factor.assign(
+      model.coupled_volumes ? size_t(kMaxJointVolumes * kMaxJointVolumes) : 0, 0.0);
   model.coupled_factor_valid = false;
 }
 
