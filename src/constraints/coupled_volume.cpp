@@ -33,39 +33,8 @@ double six_gradient(const Model& model, const VolumeConstraint& c, std::span<con
                     std::span<Vec3> grad) {
   for (const VolumeConstraint& other : model.volumes)
     for (int i : other.nodes) grad[i].setZero();
-  // Four triangles at a time: their cross products in vector lanes (GCC vector extensions,
-  // one AVX instruction each with -march=native), the same operations as Eigen's cross and
-  // dot; then their sums into grad and the volume lane by lane, in triangle order.
-  using D = double __attribute__((vector_size(4 * sizeof(double))));
   double six_volume = 0.0;
-  const size_t count = c.triangles.size();
-  size_t first = 0;
-  for (; first + 4 <= count; first += 4) {
-    const Triangle* t = &c.triangles[first];
-    D p[3][3];  // [corner][axis], lane l from triangle first + l
-    for (int corner = 0; corner < 3; ++corner)
-      for (int axis = 0; axis < 3; ++axis)
-        p[corner][axis] = D{x[t[0][corner]][axis], x[t[1][corner]][axis], x[t[2][corner]][axis],
-                            x[t[3][corner]][axis]};
-    const auto cross = [](const D* u, const D* v, D* w) {
-      w[0] = u[1] * v[2] - u[2] * v[1];
-      w[1] = u[2] * v[0] - u[0] * v[2];
-      w[2] = u[0] * v[1] - u[1] * v[0];
-    };
-    D bd[3], da[3], ab[3];
-    cross(p[1], p[2], bd);
-    cross(p[2], p[0], da);
-    cross(p[0], p[1], ab);
-    const D volume = p[0][0] * bd[0] + p[0][1] * bd[1] + p[0][2] * bd[2];
-    for (int l = 0; l < 4; ++l) {
-      grad[t[l][0]] += Vec3(bd[0][l], bd[1][l], bd[2][l]);
-      grad[t[l][1]] += Vec3(da[0][l], da[1][l], da[2][l]);
-      grad[t[l][2]] += Vec3(ab[0][l], ab[1][l], ab[2][l]);
-      six_volume += volume[l];
-    }
-  }
-  for (size_t k = first; k < count; ++k) {
-    const Triangle& t = c.triangles[k];
+  for (const Triangle& t : c.triangles) {
     const Vec3 &a = x[t[0]], &b = x[t[1]], &d = x[t[2]];
     const Vec3 bd = b.cross(d);
     grad[t[0]] += bd;
