@@ -77,8 +77,8 @@ void linearise(const Model& model, std::span<const Vec3> x, std::span<Vec3> grad
 }
 
 // The linearisation the last velocity projection kept is still the one at x: the same
-// positions on every surface and no other projection wrote the directions since (a step's
-// first projection, of the accelerations, comes at the positions of the last one's).
+// positions on every surface (a step's first projection, of the accelerations, comes at the
+// positions of the last one's, whatever was computed in between: a monitor's residual).
 bool kept_linearisation_at(const Model& model, std::span<const Vec3> x) {
   if (!model.coupled_factor_valid) return false;
   for (const VolumeConstraint& c : model.volumes)
@@ -141,7 +141,6 @@ bool project_coupled_volumes(const Model& model, std::span<Vec3> x, double load_
   const int n = int(model.volumes.size());
   Square a{};
   Column volumes{}, targets{}, residual{};
-  model.coupled_factor_valid = false;  // the directions become these positions'
   linearise(model, x, grad, a, volumes, /*keep=*/false);
   auto worst_error = [&] {
     double worst = 0.0;
@@ -192,7 +191,17 @@ bool project_coupled_volume_velocities(const Model& model, std::span<const Vec3>
     rates[size_t(k)] = kSixth * rate;
   }
   solve(n, a, rates);
-  move_along_directions(model, rates, v);
+  // v -= sum_k mu_k w dV_k/dx from the kept gradients: the directions' scratch may have been
+  // overwritten since (the position projection, a residual's pressures).
+  for (int k = 0; k < n; ++k) {
+    const VolumeConstraint& c = model.volumes[size_t(k)];
+    for (size_t m = 0; m < c.nodes.size(); ++m) {
+      const int i = c.nodes[m];
+      const Vec3 direction =
+          kSixth * c.coupled_gradient[m].cwiseProduct(model.inverse_mass[size_t(i)]);
+      v[size_t(i)] -= rates[size_t(k)] * direction;
+    }
+  }
   return true;
 }
 
@@ -225,10 +234,17 @@ bool remove_coupled_volume_pressures(const Model& model, std::span<const Vec3> x
   const int n = int(model.volumes.size());
   Square a{};
   Column balanced{};
-  model.coupled_factor_valid = false;  // the directions become these
+  // Between steps (a monitor's residual) the velocity projection has kept the gradients here.
+  const bool kept = kept_linearisation_at(model, x);
   for (int k = 0; k < n; ++k) {
     const VolumeConstraint& c = model.volumes[size_t(k)];
-    six_gradient(model, c, x, grad);
+    if (kept) {  // the same gradient, as six_gradient would leave it in grad
+      for (const VolumeConstraint& other : model.volumes)
+        for (int i : other.nodes) grad[i].setZero();
+      for (size_t m = 0; m < c.nodes.size(); ++m) grad[c.nodes[m]] = c.coupled_gradient[m];
+    } else {
+      six_gradient(model, c, x, grad);
+    }
     double rg = 0.0;
     for (size_t m = 0; m < c.nodes.size(); ++m) {
       const int i = c.nodes[m];
