@@ -206,7 +206,7 @@ struct Model {
   std::vector<Vec3> inverse_mass;
   bool coupled_volumes = false;  // some node lies on two volume constraints (set by finalize)
   // The joint velocity projection's Cholesky factor of G W G^T (sized by finalize), valid
-  // while coupled_at matches the positions and no other projection wrote the directions.
+  // while every VolumeConstraint::coupled_at matches the positions.
   mutable std::vector<double> coupled_factor;
   mutable bool coupled_factor_valid = false;
   Vec3 gravity = Vec3::Zero();  // m/s^2
