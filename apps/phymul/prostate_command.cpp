@@ -23,7 +23,7 @@ namespace {
 struct Settings {
   prostate::Options study;
   std::vector<double> fillings_ml{50, 100, 200, 300, 400};
-  std::string probe = "both", model = "lsm", neck;
+  std::string probe = "both", model = "lsm", neck, dt_estimate;
   double force = 0, lift_mm = 0, young_kpa = 0, mass_scaling_us = -1;
   int bladder_subdivisions = 0;
   std::string output = "results/prostate", json_file, scenes;
@@ -83,6 +83,8 @@ int run(Settings& s) {
   if (s.lift_mm > 0) o.probe_lift = s.lift_mm * 1e-3;
   if (s.young_kpa > 0) o.prostate_young = s.young_kpa * 1e3;
   if (s.mass_scaling_us >= 0) o.mass_scaling_dt = s.mass_scaling_us * 1e-6;
+  if (s.dt_estimate == "gershgorin") o.dt_estimate = DtEstimate::gershgorin;
+  if (s.dt_estimate == "power") o.dt_estimate = DtEstimate::power;
   try {
     if (!s.scenes.empty()) {  // the study's scenes, in dynamics, for `phymul run`
       std::filesystem::create_directories(s.scenes);
@@ -183,6 +185,10 @@ ProstateCommand add_prostate_command(CLI::App& parent) {
                   "dynamic scenes: share of the stability limit taken as dt")
       ->check(CLI::Range(0.01, 1.0))
       ->capture_default_str();
+  app->add_option("--dt-estimate", s.dt_estimate,
+                  "dynamic scenes: the stability limit dt_safety takes its share of "
+                  "(simulation.dt_estimate) [power]")
+      ->check(CLI::IsMember({"gershgorin", "power"}));
   app->add_option("--mass-scaling", s.mass_scaling_us,
                   fmt::format("dynamic scenes: mass scaling to this stability limit (us; 0: none) "
                               "[{}]",

@@ -79,6 +79,9 @@ struct VolumeConstraint {
   // [incident_start[k], incident_start[k + 1]) of incident. Empty: the triangles' scatter.
   std::vector<int> incident_start;
   std::vector<std::array<int, 2>> incident;
+  // The joint velocity projection's 6 dV/dx per node of `nodes`, and the positions it was
+  // taken at: a step's last projection and the next step's first share them.
+  mutable std::vector<Vec3> coupled_gradient, coupled_at;
 };
 
 struct AppliedForce {
@@ -227,8 +230,12 @@ struct Model {
   // position constraint holds it. The projection of global constraints moves nodes by it.
   std::vector<Vec3> inverse_mass;
   bool coupled_volumes = false;  // some node lies on two volume constraints (set by finalize)
-  Vec3 gravity = Vec3::Zero();   // m/s^2
-  double damping = 0.0;          // 1/s
+  // The joint velocity projection's Cholesky factor of G W G^T (sized by finalize), valid
+  // while every VolumeConstraint::coupled_at matches the positions.
+  mutable std::vector<double> coupled_factor;
+  mutable bool coupled_factor_valid = false;
+  Vec3 gravity = Vec3::Zero();  // m/s^2
+  double damping = 0.0;         // 1/s
   SimulationSpec settings;
 
   int node_count() const { return int(rest_position.size()); }

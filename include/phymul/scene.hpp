@@ -44,11 +44,15 @@ enum class Relaxation { fire, kinetic, viscous };
 // How static mode finds the equilibrium: damped pseudo-dynamics of any model, or the reference
 // finite elements' Newton method (fem objects only; solver/newton_run.hpp).
 enum class StaticSolver { relaxation, newton };
+// What dt: auto takes its share of: the Gershgorin bound on the shape-memory stiffness, or
+// the highest frequency found by power iteration on the linearised forces (Simulator).
+enum class DtEstimate { gershgorin, power };
 
 struct SimulationSpec {
   std::optional<double> dt;  // s; nullopt = "auto"
   double dt_safety = 0.5;    // fraction of the stability limit used by dt: auto
-  double duration = 1.0;     // s (static: the schedules are evaluated at its end)
+  DtEstimate dt_estimate = DtEstimate::gershgorin;  // that limit's estimate
+  double duration = 1.0;  // s (static: the schedules are evaluated at its end)
   Integrator integrator = Integrator::verlet;
   SolveMode mode = SolveMode::dynamic;
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  // m/s^2

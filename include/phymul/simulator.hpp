@@ -1,6 +1,8 @@
 // Stepping a model: explicit dynamics (DESIGN 2.3) and static relaxation to equilibrium.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <functional>
 #include <memory>
 #include <span>
@@ -33,6 +35,27 @@ double stable_time_step(const Model& model);
 double stable_time_step(const Model& model, const std::vector<double>& inertia);
 // Per node, the Gershgorin row sum (N/m) of the shape-memory stiffness behind that bound.
 std::vector<double> stiffness_row_sums(const Model& model);
+
+// Largest stable step (s) of central differences for the highest angular frequency omega
+// (rad/s) under mass-proportional damping (1/s); infinity when omega is zero.
+double verlet_stable_step(double omega, double damping);
+
+// The highest angular frequency of the forces linearised at `state`, over these inertias
+// (kg per node), on the free axes (simulation.dt_estimate: power). omega^2 lies between
+// `rayleigh` and `rayleigh + residual` once the iteration has found the top eigenvector (the
+// residual bounds the distance to an eigenvalue); omega() takes the top, the safe side.
+struct FrequencyEstimate {
+  double rayleigh = 0.0;  // (rad/s)^2, Rayleigh quotient of the last iterate
+  double residual = 0.0;  // (rad/s)^2, |A y - rayleigh y| for the unit iterate y
+  int iterations = 0;
+  double omega() const { return std::sqrt(std::max(rayleigh + residual, 0.0)); }
+};
+// Power iteration, the force Jacobian by central differences of the force routine; stops
+// when the residual is below 1e-4 of the quotient or after max_iterations (two force passes
+// each). Allocates: for set-up, not inside a step.
+FrequencyEstimate highest_frequency(const Model& model, const State& state,
+                                    const std::vector<double>& inertia, double load_time = 0.0,
+                                    int max_iterations = 400);
 
 struct StaticResult {
   bool converged = false;

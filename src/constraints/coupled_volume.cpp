@@ -16,10 +16,14 @@ Vec3 free_axes(const Vec3& inverse_mass) {
   return (inverse_mass.array() > 0.0).cast<double>().matrix();
 }
 
+// The scratch finalize sizes (model.cpp, mark_coupled_volumes).
 bool usable(const Model& model) {
   if (model.volumes.empty() || model.volumes.size() > size_t(kMax)) return false;
+  if (model.coupled_factor.size() != size_t(kMax * kMax)) return false;
   for (const VolumeConstraint& c : model.volumes)
-    if (c.coupled_direction.size() != c.nodes.size()) return false;
+    if (c.coupled_direction.size() != c.nodes.size() ||
+        c.coupled_gradient.size() != c.nodes.size() || c.coupled_at.size() != c.nodes.size())
+      return false;
   return true;
 }
 
@@ -48,22 +52,20 @@ double volume(const VolumeConstraint& c, std::span<const Vec3> x) {
 }
 
 // At x: every direction d_k = w dV_k/dx (into the constraint's coupled_direction), the
-// symmetric G W G^T (a_kl = dV_k/dx . d_l), each volume V_k and, when v is given, each rate
-// dV_k/dx . v. One gradient pass per surface.
-void linearise(const Model& model, std::span<const Vec3> x, std::span<const Vec3> v,
-               std::span<Vec3> grad, Square& a, Column& volumes, Column& rates) {
+// symmetric G W G^T (a_kl = dV_k/dx . d_l) and each volume V_k. One gradient pass per
+// surface; `keep`: each 6 dV_k/dx and x into the constraint's coupled_gradient, coupled_at.
+void linearise(const Model& model, std::span<const Vec3> x, std::span<Vec3> grad, Square& a,
+               Column& volumes, bool keep) {
   constexpr double kSixth = 1.0 / 6.0;
   const int n = int(model.volumes.size());
   for (int k = 0; k < n; ++k) {
     const VolumeConstraint& c = model.volumes[size_t(k)];
     volumes[size_t(k)] = six_gradient(model, c, x, grad) / 6.0;
-    double rate = 0.0;
     for (size_t m = 0; m < c.nodes.size(); ++m) {
       const int i = c.nodes[m];
       c.coupled_direction[m] = kSixth * grad[i].cwiseProduct(model.inverse_mass[size_t(i)]);
-      if (!v.empty()) rate += grad[i].dot(v[size_t(i)]);
+      if (keep) c.coupled_gradient[m] = grad[i], c.coupled_at[m] = x[size_t(i)];
     }
-    rates[size_t(k)] = kSixth * rate;
     for (int l = 0; l <= k; ++l) {  // grad is dV_k/dx (times 6) here, d_l is stored
       const VolumeConstraint& o = model.volumes[size_t(l)];
       double product = 0.0;
@@ -72,6 +74,17 @@ void linearise(const Model& model, std::span<const Vec3> x, std::span<const Vec3
       a[size_t(k * kMax + l)] = a[size_t(l * kMax + k)] = kSixth * product;
     }
   }
+}
+
+// The linearisation the last velocity projection kept is still the one at x: the same
+// positions on every surface (a step's first projection, of the accelerations, comes at the
+// positions of the last one's, whatever was computed in between: a monitor's residual).
+bool kept_linearisation_at(const Model& model, std::span<const Vec3> x) {
+  if (!model.coupled_factor_valid) return false;
+  for (const VolumeConstraint& c : model.volumes)
+    for (size_t m = 0; m < c.nodes.size(); ++m)
+      if (c.coupled_at[m] != x[size_t(c.nodes[m])]) return false;
+  return true;
 }
 
 // Lower Cholesky factor in place; false unless clearly positive definite (a surface held
@@ -127,8 +140,8 @@ bool project_coupled_volumes(const Model& model, std::span<Vec3> x, double load_
   if (!usable(model)) return false;
   const int n = int(model.volumes.size());
   Square a{};
-  Column volumes{}, rates{}, targets{}, residual{};
-  linearise(model, x, {}, grad, a, volumes, rates);
+  Column volumes{}, targets{}, residual{};
+  linearise(model, x, grad, a, volumes, /*keep=*/false);
   auto worst_error = [&] {
     double worst = 0.0;
     for (int k = 0; k < n; ++k) {
@@ -155,14 +168,40 @@ bool project_coupled_volumes(const Model& model, std::span<Vec3> x, double load_
 
 bool project_coupled_volume_velocities(const Model& model, std::span<const Vec3> x,
                                        std::span<Vec3> v, std::span<Vec3> grad) {
+  constexpr double kSixth = 1.0 / 6.0;
   if (!usable(model)) return false;
   const int n = int(model.volumes.size());
   Square a{};
-  Column volumes{}, rates{};
-  linearise(model, x, v, grad, a, volumes, rates);
-  if (!cholesky(n, a)) return false;
+  if (kept_linearisation_at(model, x)) {
+    std::copy_n(model.coupled_factor.begin(), kMax * kMax, a.begin());
+  } else {
+    model.coupled_factor_valid = false;
+    Column volumes{};
+    linearise(model, x, grad, a, volumes, /*keep=*/true);
+    if (!cholesky(n, a)) return false;
+    std::copy(a.begin(), a.end(), model.coupled_factor.begin());
+    model.coupled_factor_valid = true;
+  }
+  Column rates{};  // dV_k/dt
+  for (int k = 0; k < n; ++k) {
+    const VolumeConstraint& c = model.volumes[size_t(k)];
+    double rate = 0.0;
+    for (size_t m = 0; m < c.nodes.size(); ++m)
+      rate += c.coupled_gradient[m].dot(v[size_t(c.nodes[m])]);
+    rates[size_t(k)] = kSixth * rate;
+  }
   solve(n, a, rates);
-  move_along_directions(model, rates, v);
+  // v -= sum_k mu_k w dV_k/dx from the kept gradients: the directions' scratch may have been
+  // overwritten since (the position projection, a residual's pressures).
+  for (int k = 0; k < n; ++k) {
+    const VolumeConstraint& c = model.volumes[size_t(k)];
+    for (size_t m = 0; m < c.nodes.size(); ++m) {
+      const int i = c.nodes[m];
+      const Vec3 direction =
+          kSixth * c.coupled_gradient[m].cwiseProduct(model.inverse_mass[size_t(i)]);
+      v[size_t(i)] -= rates[size_t(k)] * direction;
+    }
+  }
   return true;
 }
 
@@ -195,9 +234,17 @@ bool remove_coupled_volume_pressures(const Model& model, std::span<const Vec3> x
   const int n = int(model.volumes.size());
   Square a{};
   Column balanced{};
+  // Between steps (a monitor's residual) the velocity projection has kept the gradients here.
+  const bool kept = kept_linearisation_at(model, x);
   for (int k = 0; k < n; ++k) {
     const VolumeConstraint& c = model.volumes[size_t(k)];
-    six_gradient(model, c, x, grad);
+    if (kept) {  // the same gradient, as six_gradient would leave it in grad
+      for (const VolumeConstraint& other : model.volumes)
+        for (int i : other.nodes) grad[i].setZero();
+      for (size_t m = 0; m < c.nodes.size(); ++m) grad[c.nodes[m]] = c.coupled_gradient[m];
+    } else {
+      six_gradient(model, c, x, grad);
+    }
     double rg = 0.0;
     for (size_t m = 0; m < c.nodes.size(); ++m) {
       const int i = c.nodes[m];

@@ -162,9 +162,7 @@ void plan_polar_batches(ShapeMemory& m) {
     lanes.clear();
     others.clear();
     for (int k = m.plan.block_start[b]; k < m.plan.block_start[b + 1]; ++k) {
-      // Flat interior neighbourhoods (a box's corners) take their normal from a pair: scalar.
-      const bool batchable = (m.surface || m.framed.find(k) < 0) &&
-                             int(m.neighbours.row(k).size()) <= kShapeMemoryMaxBatchedNeighbours;
+      const bool batchable = int(m.neighbours.row(k).size()) <= kShapeMemoryMaxBatchedNeighbours;
       (batchable ? lanes : others).push_back(k);
     }
     std::stable_sort(lanes.begin(), lanes.end(), [&](int a, int c) { return count(a) < count(c); });
@@ -217,21 +215,43 @@ double add_polar_batch_forces(const ShapeMemory& m, const std::array<int, W>& ks
   M3 A;
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b) A.a[a][b] = P.a[a][b] - sum_d.v[a] * mean_r.v[b];
-  // Surface nodes: the normal pair, A += w N/|N| n0^T, N and n0 the current and rest normals
-  // of the ordered ring about its centroid (shape_memory.cpp's ring_normal).
-  const bool ring = m.framed.find(ks[0]) >= 0;
+  // The normal pair, A += w N/|N| n0^T, N and n0 the current and rest normals about the
+  // centroid: of the ordered ring on a surface (shape_memory.cpp's ring_normal), of the frame
+  // pair of a flat interior neighbourhood, a box's corner (pair_normal).
+  const bool normal_pair = m.framed.find(ks[0]) >= 0;
+  const bool ring = normal_pair && m.surface;
   V3 unit_normal{}, rest_normal{};
   D normal_length{}, weight{};
-  if (ring) {
+  V3 pair_offset[2]{};           // x_a - g, x_b - g for the pair (a, b)
+  std::array<int, 2> pair[W]{};  // positions of a and b in each lane's row
+  if (normal_pair) {
     const V3 mean_d = sum_d / count;
     V3 N{}, N0{};
-    for (int j = 0; j + 1 < n; ++j) {
-      N = N + cross(dx[j] - mean_d, dx[j + 1] - mean_d);
-      N0 = N0 + cross(r[j] - mean_r, r[j + 1] - mean_r);
-    }
-    if (n > 2) {
-      N = N + cross(dx[n - 1] - mean_d, dx[0] - mean_d);
-      N0 = N0 + cross(r[n - 1] - mean_r, r[0] - mean_r);
+    if (ring) {
+      for (int j = 0; j + 1 < n; ++j) {
+        N = N + cross(dx[j] - mean_d, dx[j + 1] - mean_d);
+        N0 = N0 + cross(r[j] - mean_r, r[j + 1] - mean_r);
+      }
+      if (n > 2) {
+        N = N + cross(dx[n - 1] - mean_d, dx[0] - mean_d);
+        N0 = N0 + cross(r[n - 1] - mean_r, r[0] - mean_r);
+      }
+    } else {
+      V3 rest_offset[2]{};
+      for (int l = 0; l < W; ++l) {
+        pair[l] = m.frame_pair[size_t(m.framed.find(ks[l]))];
+        for (int e = 0; e < 2; ++e)
+          for (int a = 0; a < 3; ++a) {
+            pair_offset[e].v[a][l] = dx[pair[l][e]].v[a][l];
+            rest_offset[e].v[a][l] = r[pair[l][e]].v[a][l];
+          }
+      }
+      for (int e = 0; e < 2; ++e) {
+        pair_offset[e] = pair_offset[e] - mean_d;
+        rest_offset[e] = rest_offset[e] - mean_r;
+      }
+      N = cross(pair_offset[0], pair_offset[1]);
+      N0 = cross(rest_offset[0], rest_offset[1]);
     }
     normal_length = lane_sqrt(dot(N, N));
     unit_normal = N / normal_length;
@@ -284,10 +304,21 @@ double add_polar_batch_forces(const ShapeMemory& m, const std::array<int, W>& ks
       const V3 e = r[j] - mean_r;  // X_j - G0
       r[j] = share + times(R, cross(half_mu, e));
     }
-    if (ring) {  // the normal pair: dE = h'.dN through the ring's cross products
+    if (normal_pair) {  // dE = h'.dN through the normal's cross products
       const V3 h = times(R, cross(half_mu, rest_normal)) * weight;
       const V3 hp = (h - unit_normal * dot(unit_normal, h)) / normal_length;
-      for (int j = 0; j < n; ++j) r[j] = r[j] + cross(dx[(j + 1) % n] - dx[(j + n - 1) % n], hp);
+      if (ring) {
+        for (int j = 0; j < n; ++j) r[j] = r[j] + cross(dx[(j + 1) % n] - dx[(j + n - 1) % n], hp);
+      } else {  // N = (x_a - g) x (x_b - g): a and b, and every neighbour through g
+        const V3 ga = cross(pair_offset[1], hp), gb = cross(hp, pair_offset[0]);
+        const V3 through_centroid = (ga + gb) / count;
+        for (int j = 0; j < n; ++j) r[j] = r[j] - through_centroid;
+        for (int l = 0; l < W; ++l)
+          for (int a = 0; a < 3; ++a) {
+            r[pair[l][0]].v[a][l] += ga.v[a][l];
+            r[pair[l][1]].v[a][l] += gb.v[a][l];
+          }
+      }
     }
   }
 

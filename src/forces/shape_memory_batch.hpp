@@ -24,8 +24,8 @@ double add_polar_node_forces(const ShapeMemory& m, int k, std::span<const Vec3> 
                              std::span<const Vec3> x, std::span<Eigen::Quaterniond> rotations,
                              std::span<Vec3> f);
 
-// The pass of the memory nodes ks (no normal pair, equal neighbour counts), lane by lane in
-// their order as far as the forces are concerned; returns their energy. batched[l]: lane l
+// The pass of the memory nodes ks (equal neighbour counts, all with a normal pair or none), lane by
+// lane in their order as far as the forces are concerned; returns their energy. batched[l]: lane l
 // was computed in the lanes (false: it fell back to the scalar path).
 double add_polar_batch_forces(const ShapeMemory& m, const std::array<int, kShapeMemoryLanes>& ks,
                               std::span<const Vec3> rest, std::span<const Vec3> x,

@@ -169,6 +169,16 @@ std::vector<Parameter> simulation_parameters() {
        .default_value = "0.5",
        .doc = "Fraction of the stability limit used by `dt: auto`."},
       {.section = "simulation",
+       .name = "dt_estimate",
+       .kind = Kind::choice,
+       .choices = {"gershgorin", "power"},
+       .default_value = "gershgorin",
+       .doc = "The stability limit `dt: auto` takes its share of: `gershgorin`, a bound on the "
+              "shape-memory stiffness per node (cheap, pessimistic); `power`, 2/omega from the "
+              "highest frequency of the forces linearised at the start, over the node inertias "
+              "(power iteration, up to 800 force passes at set-up; nearer the true limit, so "
+              "keep dt_safety below 1)."},
+      {.section = "simulation",
        .name = "mass_scaling_dt",
        .kind = Kind::quantity,
        .dimension = Dimension::time,

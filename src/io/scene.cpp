@@ -240,6 +240,8 @@ SimulationSpec SceneBuilder::simulation(SectionReader& reader) {
   spec.loc = reader.loc();
   reader.read("dt", spec.dt);
   reader.read("dt_safety", spec.dt_safety);
+  reader.read("dt_estimate", spec.dt_estimate,
+              {{"gershgorin", DtEstimate::gershgorin}, {"power", DtEstimate::power}});
   reader.read("mass_scaling_dt", spec.mass_scaling_dt);
   reader.read("duration", spec.duration);
   reader.read("integrator", spec.integrator,

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "constraints/constraints.hpp"
+#include "constraints/coupled_volume.hpp"
 #include "constraints/doubled.hpp"
 #include "forces/explicit_fem.hpp"
 #include "forces/shape_memory.hpp"
@@ -52,8 +53,15 @@ void mark_coupled_volumes(Model& model) {
       if (seen[size_t(i)]) model.coupled_volumes = true;
       seen[size_t(i)] = 1;
     }
-  for (const VolumeConstraint& c : model.volumes)  // the joint projection's directions
-    c.coupled_direction.assign(model.coupled_volumes ? c.nodes.size() : 0, Vec3::Zero());
+  for (const VolumeConstraint& c : model.volumes) {  // the joint projection's scratch
+    const size_t size = model.coupled_volumes ? c.nodes.size() : 0;
+    c.coupled_direction.assign(size, Vec3::Zero());
+    c.coupled_gradient.assign(size, Vec3::Zero());
+    c.coupled_at.assign(size, Vec3::Zero());
+  }
+  model.coupled_factor.assign(
+      model.coupled_volumes ? size_t(kMaxJointVolumes * kMaxJointVolumes) : 0, 0.0);
+  model.coupled_factor_valid = false;
 }
 
 // Nodes, masses, cells, boundary and node sets of a component's mesh, appended to the model.

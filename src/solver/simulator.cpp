@@ -88,7 +88,11 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
     scale_masses_to(*model_.settings.mass_scaling_dt);
     if (!inertia_.empty()) stable = stable_time_step(model_, inertia_);
   }
+  if (model_.settings.dt_estimate == DtEstimate::power)  // the inertias the steps use
+    stable =
+        verlet_stable_step(highest_frequency(model_, state_, inertia()).omega(), model_.damping);
   stable_dt_ = stable;
+  model_.coupled_factor_valid = false;  // kept by another simulator, for other inertias
   dt_ = model_.settings.dt ? *model_.settings.dt : model_.settings.dt_safety * stable;
   if (!std::isfinite(dt_)) dt_ = 1e-3;  // no stiffness at all: any step is stable
   apply_position_constraints(model_, state_.x, 0.0, f_start_);  // free between steps

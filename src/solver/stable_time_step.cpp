@@ -39,11 +39,7 @@ double stable_time_step(const Model& model, const std::vector<double>& inertia) 
   const std::vector<double> row = stiffness_row_sums(model);
   double omega2 = 0.0;
   for (int i = 0; i < model.node_count(); ++i) omega2 = std::max(omega2, row[i] / inertia[i]);
-  if (omega2 == 0.0) return std::numeric_limits<double>::infinity();
-  const double omega = std::sqrt(omega2);
-  // Central differences with viscous damping c: dt < (2/w)(sqrt(1 + xi^2) - xi), xi = c/(2w).
-  const double xi = model.damping / (2.0 * omega);
-  return 2.0 / omega * (std::sqrt(1.0 + xi * xi) - xi);
+  return verlet_stable_step(std::sqrt(omega2), model.damping);
 }
 
 }  // namespace phymul

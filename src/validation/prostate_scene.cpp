@@ -76,6 +76,7 @@ std::string scene_text(const Options& o, const SceneSettings& s) {
   t += "simulation:\n";
   if (s.dynamic) {
     t += fmt::format("  dt: auto\n  dt_safety: {}\n", o.dt_safety);
+    if (o.dt_estimate == DtEstimate::power) t += "  dt_estimate: power\n";
     if (o.mass_scaling_dt > 0.0)
       t += fmt::format("  mass_scaling_dt: {:.6g} us\n", o.mass_scaling_dt * 1e6);
     t += fmt::format("  damping: {:.17g} 1/s\n", o.damping);
