@@ -30,8 +30,8 @@ int report_scene_error(const phymul::SceneError& e) {
 }
 
 // What a scene's `young` made of a shape-memory K, and how near the FEM that leaves it.
-void print_stiffness_calibrations(const phymul::Model& model) {
-  for (const phymul::StiffnessCalibration& c : model.stiffness_calibrations)
+void print_stiffness_calibrations(const std::vector<phymul::StiffnessCalibration>& calibrations) {
+  for (const phymul::StiffnessCalibration& c : calibrations)
     std::cout << fmt::format(
         "  object '{}': K = {:.4g} N/m from E = {:.4g} Pa, nu = {:g} (alpha = K/(E h) = {:.3g}, "
         "h = {:.3g} mm): compressed {:g} % along {} ({} and {} nodes clamped), the FEM takes "
@@ -45,7 +45,7 @@ int check(const std::string& file) {
   try {
     const phymul::Scene scene = phymul::load_scene(file);
     const phymul::Model model = phymul::compile_scene(scene);
-    print_stiffness_calibrations(model);
+    print_stiffness_calibrations(model.stiffness_calibrations);
     if (scene.simulation.solver == phymul::StaticSolver::newton) {  // no time step to speak of
       std::cout << fmt::format("{}: ok ({} objects, {} nodes, {} cells; static, Newton)\n", file,
                                model.components.size(), model.node_count(), model.cells.size());
@@ -101,6 +101,7 @@ int run(RunArguments a) {
           "{} frames in {}\n",
           file, r.status, r.steps, r.simulated_time, r.wall_time, r.ns_per_node_per_step, r.frames,
           out);
+    if (!quiet) print_stiffness_calibrations(r.stiffness_calibrations);
     if (r.status == "unstable") {
       std::cerr << "error: " << r.message << '\n';
       return kUnstable;

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <string>
 
+#include "phymul/model.hpp"
 #include "phymul/scene.hpp"
 
 namespace phymul {
@@ -55,6 +56,8 @@ struct RunReport {
   int load_steps_done = 0, load_steps = 0;
   Eigen::Vector3d support_reaction = Eigen::Vector3d::Zero();  // N
   Eigen::Vector3d applied_load = Eigen::Vector3d::Zero();      // N
+  // Shape-memory objects given `young` (report.json has "stiffness_from_young" only then).
+  std::vector<StiffnessCalibration> stiffness_calibrations;
 };
 
 // Compiles and runs the scene, writing into options.output_dir (created if missing; a

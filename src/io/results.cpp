@@ -171,6 +171,25 @@ std::string newton_fields(const RunReport& r) {
       json_vector(r.applied_load));
 }
 
+// What each shape-memory object given `young` made of it (RunReport::stiffness_calibrations).
+std::string calibration_fields(const RunReport& r) {
+  if (r.stiffness_calibrations.empty()) return "";
+  std::string s = ",\n  \"stiffness_from_young\": [";
+  for (size_t k = 0; k < r.stiffness_calibrations.size(); ++k) {
+    const StiffnessCalibration& c = r.stiffness_calibrations[k];
+    s += fmt::format(
+        "{}\n    {{\"object\": {}, \"young_Pa\": {}, \"poisson\": {}, \"axis\": \"{}\", "
+        "\"strain\": {}, \"held_nodes\": {}, \"pushed_nodes\": {}, \"fem_force_N\": {}, "
+        "\"stiffness_N_per_m\": {}, \"alpha\": {}, \"displacement_rms\": {}, "
+        "\"displacement_max\": {}}}",
+        k ? "," : "", json_string(c.component), json_number(c.young), json_number(c.poisson),
+        "xyz"[c.axis], json_number(c.strain), c.held, c.pushed, json_number(c.fem_force),
+        json_number(c.stiffness), json_number(c.alpha), json_number(c.displacement_rms),
+        json_number(c.displacement_max));
+  }
+  return s + "\n  ]";
+}
+
 }  // namespace
 
 std::string report_json(const RunReport& r) {
@@ -181,12 +200,12 @@ std::string report_json(const RunReport& r) {
       "\"dt_s\": {},\n"
       "  \"stable_dt_s\": {},\n  \"nodes\": {},\n  \"threads\": {},\n  \"frames\": {},\n"
       "  \"converged\": {},\n"
-      "  \"final_residual_force_N\": {}{}\n}}\n",
+      "  \"final_residual_force_N\": {}{}{}\n}}\n",
       json_string(r.status), json_string(r.message), json_string(r.mode), r.steps,
       json_number(r.simulated_time), json_number(r.wall_time), json_number(r.ns_per_node_per_step),
       json_number(r.real_time_factor), json_number(r.dt), json_number(r.stable_dt), r.nodes,
       r.threads, r.frames, r.converged ? "true" : "false", json_number(r.residual),
-      newton_fields(r));
+      newton_fields(r), calibration_fields(r));
 }
 
 }  // namespace phymul

@@ -297,6 +297,7 @@ RunReport run_scene(const Scene& scene, const RunOptions& options) {
 
   RunReport report;
   report.nodes = model.node_count();
+  report.stiffness_calibrations = model.stiffness_calibrations;
   report.threads = omp_get_max_threads();
   report.dt = sim.dt();
   report.stable_dt = sim.stable_dt();

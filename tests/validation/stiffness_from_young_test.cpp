@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include "phymul/calibration.hpp"
@@ -12,6 +14,7 @@
 #include "phymul/scene.hpp"
 #include "phymul/simulator.hpp"
 #include "solver/newton_run.hpp"
+#include "support/process.hpp"
 
 namespace phymul {
 namespace {
@@ -190,6 +193,38 @@ objects:
   EXPECT_EQ(model.shape_memory[0].stiffness, model.stiffness_calibrations[0].stiffness);
   ASSERT_EQ(model.fibres.size(), 1u);
   EXPECT_EQ(model.fibres[0].stiffness, model.shape_memory[0].stiffness);
+}
+
+// A run reports the calibration in report.json (read back by Python's json) and on its
+// terminal line, with the K the scene's object was given.
+TEST(StiffnessFromYoung, ARunReportsTheCalibratedStiffness) {
+  testing::TempDir dir;
+  const auto scene = dir.path() / "organ.yaml";
+  std::ofstream(scene) << cube_scene("{young: 14.9 kPa, poisson: 0.499, density: 1000 kg/m^3}",
+                                     true, "{mode: static, duration: 1 s, tolerance: 1e-8 N}", 0.4);
+  const Model model = compile_scene(load_scene(scene));
+  ASSERT_EQ(model.stiffness_calibrations.size(), 1u);
+  const auto out = dir.path() / "out";
+  const auto run =
+      testing::run_command(testing::cli() + " run " + scene.string() + " -o " + out.string());
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("object 'cube': K = "), std::string::npos) << run.output;
+  const auto read = testing::run_command(
+      "/usr/bin/python3 -c \"import json, sys; c = json.load(open(sys.argv[1]))"
+      "['stiffness_from_young'][0]; print(c['object'], c['axis'], c['held_nodes'], "
+      "repr(c['stiffness_N_per_m']), repr(c['young_Pa']))\" " +
+      (out / "report.json").string());
+  ASSERT_EQ(read.exit_code, 0) << read.output;
+  std::istringstream in(read.output);
+  std::string object, axis;
+  int held = 0;
+  double k = 0.0, young = 0.0;
+  in >> object >> axis >> held >> k >> young;
+  EXPECT_EQ(object, "cube");
+  EXPECT_EQ(axis, "z");
+  EXPECT_EQ(held, 25);
+  EXPECT_EQ(k, model.stiffness_calibrations[0].stiffness);
+  EXPECT_EQ(young, 14.9e3);
 }
 
 }  // namespace
