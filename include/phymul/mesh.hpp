@@ -52,6 +52,9 @@ class MeshError : public std::runtime_error {
 // Signed volume (m^3) of a volumetric cell, area (m^2, positive) of a surface cell.
 double cell_measure(const std::vector<Vec3>& points, const Cell& cell);
 
+// Lower and upper corners (m) of the axis-aligned box around the points; zero for none.
+std::array<Vec3, 2> bounding_box(std::span<const Vec3> points);
+
 // The three tetrahedra of a wedge, cut so that neighbouring wedges split their shared
 // quadrilateral the same way (each quad along the diagonal through its smallest node id).
 // Their orientation is not fixed: order them by their signed volume where it matters.

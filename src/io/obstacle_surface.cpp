@@ -125,8 +125,7 @@ Mesh obstacle_surfaces(std::span<const RigidObstacle> obstacles, double load_tim
 void write_obstacle_surfaces(const std::filesystem::path& path,
                              std::span<const RigidObstacle> obstacles, double load_time,
                              std::span<const Vec3> x) {
-  Vec3 lo = x.front(), hi = lo;
-  for (const Vec3& p : x) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  const auto [lo, hi] = bounding_box(x);
   std::vector<int> owner;
   const Mesh surfaces = obstacle_surfaces(obstacles, load_time, lo, hi, owner);
   const CellField cells[] = {{"obstacle", owner}};

@@ -193,8 +193,7 @@ class SceneBuilder {
   void load(SectionReader& reader, Scene& scene);
   ConstraintSpec constraint(SectionReader& reader);
   LinkSpec link(SectionReader& reader);
-  void object_kind(SectionReader& reader, ObjectSpec& spec,
-                   const std::optional<SourceLoc>& stiffness_at);
+  void object_kind(SectionReader& reader, ObjectSpec& spec);
   void elastic_material(const MaterialSpec& material);
   FibreSpec fibres(SectionReader& reader);
   OutputSpec output(SectionReader& reader);
@@ -270,21 +269,16 @@ ObjectSpec SceneBuilder::object(SectionReader& reader) {
   if (reader.read("name", spec.name))
     names_.push_back({spec.name, *reader.value_loc("name"), reader.where()});
   if (auto mesh_reader = reader.map("mesh")) spec.mesh = mesh(*mesh_reader);
-  std::optional<SourceLoc> stiffness_at;
-  if (auto material_reader = reader.map("material")) {
-    spec.material = material(*material_reader);
-    stiffness_at = material_reader->value_loc("stiffness");
-  }
+  if (auto material_reader = reader.map("material")) spec.material = material(*material_reader);
   reader.read("volume_constraint", spec.volume_constraint);
   reader.read_scalar("target_volume", spec.target_volume);
-  object_kind(reader, spec, stiffness_at);
+  object_kind(reader, spec);
   reader.done();
   return spec;
 }
 
 // What the object's type adds (motion, fibres) and the fields it refuses or needs.
-void SceneBuilder::object_kind(SectionReader& reader, ObjectSpec& spec,
-                               const std::optional<SourceLoc>& stiffness_at) {
+void SceneBuilder::object_kind(SectionReader& reader, ObjectSpec& spec) {
   const bool has_type = reader.read("type", spec.type,
                                     {{"elastic", ObjectType::elastic},
                                      {"rigid", ObjectType::rigid},
@@ -301,8 +295,8 @@ void SceneBuilder::object_kind(SectionReader& reader, ObjectSpec& spec,
   if (auto fibre_reader = reader.map("fibres")) spec.fibres = fibres(*fibre_reader);
   if (!has_type) return;
   if (spec.type == ObjectType::rigid) {
-    if (stiffness_at)
-      context_.error(*stiffness_at,
+    if (spec.material.stiffness_loc.line > 0)
+      context_.error(spec.material.stiffness_loc,
                      "'stiffness' applies only to elastic and active objects "
                      "(this object is rigid)");
     if (spec.material.young_loc.line > 0)

@@ -361,6 +361,13 @@ double cell_measure(const std::vector<Vec3>& points, const Cell& cell) {
   throw_unknown_type(cell.type);
 }
 
+std::array<Vec3, 2> bounding_box(std::span<const Vec3> points) {
+  if (points.empty()) return {Vec3::Zero(), Vec3::Zero()};
+  Vec3 lo = points.front(), hi = lo;
+  for (const Vec3& p : points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  return {lo, hi};
+}
+
 void validate(const Mesh& mesh) {
   if (mesh.cells.empty()) throw MeshError("mesh has no cells");
   check_points_finite(mesh.points);

@@ -33,8 +33,7 @@ FrequencyEstimate highest_frequency(const Model& model, const State& state,
   constexpr double kRelativeMove = 1e-5;
   constexpr double kSettled = 1e-4;  // residual over Rayleigh quotient: an eigenvector
   const int n = model.node_count();
-  Vec3 lo = model.rest_position.empty() ? Vec3::Zero() : model.rest_position[0], hi = lo;
-  for (const Vec3& p : model.rest_position) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  const auto [lo, hi] = bounding_box(model.rest_position);
   const double size = std::max((hi - lo).norm(), 1e-12);
   std::vector<Vec3> y(size_t(n), Vec3::Zero()), ay(size_t(n), Vec3::Zero());
   std::vector<double> root(size_t(n), 0.0);  // sqrt of each node's inertia

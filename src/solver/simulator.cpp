@@ -41,8 +41,7 @@ Vec3 free_axes(const Vec3& inverse_mass) {
 
 double bounding_diagonal(const std::vector<Vec3>& p) {
   if (p.empty()) return 1.0;
-  Vec3 lo = p[0], hi = p[0];
-  for (const Vec3& q : p) lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
+  const auto [lo, hi] = bounding_box(p);
   return std::max((hi - lo).norm(), 1e-12);
 }
 
@@ -83,14 +82,13 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
   if (model_.settings.mode == SolveMode::static_equilibrium &&
       model_.settings.relaxation_mass_scaling)
     scale_masses_for_relaxation();
-  double stable = stable_time_step(model_);
-  if (model_.settings.mode == SolveMode::dynamic && model_.settings.mass_scaling_dt) {
-    scale_masses_to(*model_.settings.mass_scaling_dt);
-    if (!inertia_.empty()) stable = stable_time_step(model_, inertia_);
-  }
-  if (model_.settings.dt_estimate == DtEstimate::power)  // the inertias the steps use
-    stable =
-        verlet_stable_step(highest_frequency(model_, state_, inertia()).omega(), model_.damping);
+  const bool scaled = model_.settings.mode == SolveMode::dynamic && model_.settings.mass_scaling_dt;
+  if (scaled) scale_masses_to(*model_.settings.mass_scaling_dt);
+  // Dynamics take the inertias the steps use; static relaxation's fictitious ones are not.
+  const double stable =
+      model_.settings.dt_estimate == DtEstimate::power
+          ? verlet_stable_step(highest_frequency(model_, state_, inertia()).omega(), model_.damping)
+          : stable_time_step(model_, scaled ? inertia() : model_.mass);
   stable_dt_ = stable;
   model_.coupled_factor_valid = false;  // kept by another simulator, for other inertias
   dt_ = model_.settings.dt ? *model_.settings.dt : model_.settings.dt_safety * stable;

@@ -212,10 +212,7 @@ Mesh fem_cells(const std::string& name, const Mesh& mesh) {
   Mesh out;
   out.points = mesh.points;
   const auto add_tetra = [&](Cell t) {
-    const Vec3& a = out.points[size_t(t.nodes[0])];
-    const Vec3 ab = out.points[size_t(t.nodes[1])] - a, ac = out.points[size_t(t.nodes[2])] - a,
-               ad = out.points[size_t(t.nodes[3])] - a;
-    if (ab.cross(ac).dot(ad) < 0.0) std::swap(t.nodes[1], t.nodes[2]);
+    if (cell_measure(out.points, t) < 0.0) std::swap(t.nodes[1], t.nodes[2]);
     out.cells.push_back(t);
   };
   for (const Cell& cell : mesh.cells) {
@@ -280,13 +277,8 @@ StiffnessCalibration calibrate_object(const std::string& name, const Mesh& mesh,
         name, "xyz"[axis], shared.front()));
   c.held = int(p.held.size());
   c.pushed = int(p.pushed.size());
-  double low = mesh.points.front()[axis], high = low;
-  for (const Vec3& x : mesh.points) {
-    low = std::min(low, x[axis]);
-    high = std::max(high, x[axis]);
-  }
-  const double extent = high - low;
-  c.push = strain * extent;
+  const auto [low, high] = bounding_box(mesh.points);
+  c.push = strain * (high[axis] - low[axis]);
   p.push = -c.push;
   p.fem_material = {fem::Law::linear, material.young, material.poisson};
   p.load_steps = 1;
