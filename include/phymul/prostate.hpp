@@ -121,6 +121,8 @@ struct RealTimeRun {
   // steps x dt / the process's CPU time: what a step costs on one core when a busy machine
   // shares it (wall time then counts the waits too)
   double cpu_real_time_factor = 0.0;
+  // steps x dt / the wall time inside the steps: the output and the set-up left out
+  double stepping_real_time_factor = 0.0;
   double added_mass_pct = 0.0;  // mass scaling's added inertia, % of the model's mass
 };
 

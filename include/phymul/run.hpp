@@ -43,6 +43,10 @@ struct RunReport {
   // Dynamic mode: simulated seconds per wall-clock second, output included (steps per second
   // x dt); real time when >= 1.
   double real_time_factor = 0.0;
+  // Dynamic mode: the wall-clock time inside the steps alone (s), and the simulated seconds
+  // per second of it: what an interactive loop that writes no files gets.
+  double step_wall_time = 0.0;
+  double stepping_real_time_factor = 0.0;
   double dt = 0.0, stable_dt = 0.0;  // s
   int nodes = 0;
   int threads = 1;  // OpenMP threads the run used

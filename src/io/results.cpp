@@ -197,14 +197,15 @@ std::string report_json(const RunReport& r) {
       "{{\n  \"status\": {},\n  \"message\": {},\n  \"mode\": {},\n  \"steps\": {},\n  "
       "\"simulated_time_s\": {},\n"
       "  \"wall_time_s\": {},\n  \"ns_per_node_per_step\": {},\n  \"real_time_factor\": {},\n  "
-      "\"dt_s\": {},\n"
+      "\"step_wall_time_s\": {},\n  \"stepping_real_time_factor\": {},\n  \"dt_s\": {},\n"
       "  \"stable_dt_s\": {},\n  \"nodes\": {},\n  \"threads\": {},\n  \"frames\": {},\n"
       "  \"converged\": {},\n"
       "  \"final_residual_force_N\": {}{}{}\n}}\n",
       json_string(r.status), json_string(r.message), json_string(r.mode), r.steps,
       json_number(r.simulated_time), json_number(r.wall_time), json_number(r.ns_per_node_per_step),
-      json_number(r.real_time_factor), json_number(r.dt), json_number(r.stable_dt), r.nodes,
-      r.threads, r.frames, r.converged ? "true" : "false", json_number(r.residual),
+      json_number(r.real_time_factor), json_number(r.step_wall_time),
+      json_number(r.stepping_real_time_factor), json_number(r.dt), json_number(r.stable_dt),
+      r.nodes, r.threads, r.frames, r.converged ? "true" : "false", json_number(r.residual),
       newton_fields(r), calibration_fields(r));
 }
 

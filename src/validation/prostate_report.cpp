@@ -47,9 +47,11 @@ std::string json(const Study& study) {
       j += fmt::format(
           "{}\n    {{\"bladder_volume_ml\": {:.6g}, \"probe\": \"{}\", \"steps\": {}, "
           "\"dt_s\": {:.6g}, \"wall_time_s\": {:.6g}, \"real_time_factor\": {:.6g}, "
-          "\"cpu_real_time_factor\": {:.6g}, \"added_mass_pct\": {:.6g}}}",
+          "\"cpu_real_time_factor\": {:.6g}, \"stepping_real_time_factor\": {:.6g}, "
+          "\"added_mass_pct\": {:.6g}}}",
           k ? "," : "", r.filling * 1e6, probe_name(r.probe), r.steps, r.dt, r.wall_time,
-          r.real_time_factor, r.cpu_real_time_factor, r.added_mass_pct);
+          r.real_time_factor, r.cpu_real_time_factor, r.stepping_real_time_factor,
+          r.added_mass_pct);
     }
     j += fmt::format("\n  ],\n  \"real_time_factor\": {:.6g}", study.real_time_factor);
   }

@@ -46,7 +46,9 @@ mon = np.genfromtxt(os.path.join(d, 'monitors.csv'), delimiter=',', names=True)
 v = mon['volume_jelly_m3']
 print('frames', len(sets), 'worst', worst, 'sag', float(-u[:, 2].min()),
       'status', r['status'], 'steps', r['steps'], 'volerr', float(np.abs(v / 8e-6 - 1).max()),
-      'time', r['simulated_time_s'])
+      'time', r['simulated_time_s'], 'rows', len(mon),
+      'stepping', r['step_wall_time_s'], 'wall', r['wall_time_s'],
+      'stepping_factor', r['stepping_real_time_factor'], 'factor', r['real_time_factor'])
 )";
 
 TEST(RunOutput, SeriesMonitorsAndReportReadBack) {
@@ -70,8 +72,11 @@ TEST(RunOutput, SeriesMonitorsAndReportReadBack) {
   int frames = 0;
   long steps = 0;
   double worst = 1, sag = 0, volerr = 1, time = 0;
+  long rows = 0;
+  double stepping = 0, wall = 0, stepping_factor = 0, factor = 0;
   in >> key >> frames >> key >> worst >> key >> sag >> key >> status >> key >> steps >> key >>
-      volerr >> key >> time;
+      volerr >> key >> time >> key >> rows >> key >> stepping >> key >> wall >> key >>
+      stepping_factor >> key >> factor;
   EXPECT_EQ(frames, 5);  // t = 0 and every 0.05 s up to 0.2 s
   EXPECT_LT(worst, 1e-15);
   EXPECT_GT(sag, 1e-4);  // the jelly sags under its weight
@@ -79,6 +84,12 @@ TEST(RunOutput, SeriesMonitorsAndReportReadBack) {
   EXPECT_GT(steps, 10);
   EXPECT_LT(volerr, 1e-10);
   EXPECT_NEAR(time, 0.2, 1e-3);
+  EXPECT_EQ(rows, steps + 1);  // t = 0, then every step of a run under 1000 steps
+  // The steps' own wall time is part of the run's, and their factor is per second of it.
+  EXPECT_GT(stepping, 0.0);
+  EXPECT_LE(stepping, wall);
+  EXPECT_NEAR(stepping_factor * stepping, time, 1e-6 * time);
+  EXPECT_GE(stepping_factor, factor);
 }
 
 }  // namespace
