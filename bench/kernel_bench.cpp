@@ -1,0 +1,63 @@
+// The shape-memory pass alone (forces/shape_memory.cpp and its batched kernel) on the step
+// benchmark's pushed cube, in the middle of its push: the rotations one step old, as a dynamic
+// step finds them, so that the lanes take the Newton turns a step takes. Reports the time per
+// memory node of one pass.
+#include <benchmark/benchmark.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+
+#include "cube.hpp"
+#include "forces/shape_memory.hpp"
+
+namespace {
+
+using namespace phymul;
+
+struct Snapshot {
+  std::vector<Vec3> x;                       // at step s + 1
+  std::vector<Eigen::Quaterniond> rotation;  // fitted at step s
+};
+
+// The pushed cube stepped into its push (40 steps: top moved, the block deforming).
+Snapshot snapshot(Simulator& sim) {
+  for (int s = 0; s < 40; ++s) sim.step();
+  Snapshot snap;
+  snap.rotation = sim.state().rotation;
+  sim.step();
+  snap.x = sim.state().x;
+  return snap;
+}
+
+void BM_ShapeMemoryPass(benchmark::State& state) {
+  omp_set_num_threads(int(state.range(1)));
+  Simulator sim(bench::pushed_cube(int(state.range(0))));
+  const Snapshot snap = snapshot(sim);
+  const Model& model = sim.model();
+  const ShapeMemory& m = model.shape_memory[0];
+  std::vector<Eigen::Quaterniond> rotation = snap.rotation;
+  std::vector<Vec3> f(snap.x.size());
+  double energy = 0.0;
+  double seconds = 0.0;
+  for (auto _ : state) {
+    std::copy(snap.rotation.begin(), snap.rotation.end(), rotation.begin());
+    std::fill(f.begin(), f.end(), Vec3::Zero());
+    const auto start = std::chrono::steady_clock::now();
+    energy = add_shape_memory_forces(m, model.rest_position, snap.x, rotation, f);
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  benchmark::DoNotOptimize(energy);
+  state.counters["memory_nodes"] = double(m.nodes.size());
+  state.counters["ns_per_node"] =
+      seconds * 1e9 / (double(m.nodes.size()) * double(state.iterations()));
+}
+BENCHMARK(BM_ShapeMemoryPass)
+    ->Args({24, 1})
+    ->Args({40, 1})
+    ->Args({40, 2})
+    ->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
