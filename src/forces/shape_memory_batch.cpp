@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #if defined(__AVX__)
@@ -53,8 +54,16 @@ PHYMUL_LANES D splat(double s) { return D{} + s; }
 PHYMUL_LANES D lane_sqrt(const D& v) {
   return D{std::sqrt(v[0]), std::sqrt(v[1]), std::sqrt(v[2]), std::sqrt(v[3])};
 }
-PHYMUL_LANES bool any(const Mask& m) { return (m[0] | m[1] | m[2] | m[3]) != 0; }
-PHYMUL_LANES bool all(const Mask& m) { return (m[0] & m[1] & m[2] & m[3]) != 0; }
+// Masks hold all ones (true) or zeros per lane.
+PHYMUL_LANES int sign_bits(const Mask& m) {
+#if defined(__AVX__)
+  return _mm256_movemask_pd(__m256d(m));
+#else
+  return (m[0] ? 1 : 0) | (m[1] ? 2 : 0) | (m[2] ? 4 : 0) | (m[3] ? 8 : 0);
+#endif
+}
+PHYMUL_LANES bool any(const Mask& m) { return sign_bits(m) != 0; }
+PHYMUL_LANES bool all(const Mask& m) { return sign_bits(m) == (1 << W) - 1; }
 
 // (p[0], p[1], p[2], 0): one point, without reading past it (the last node of x, say).
 PHYMUL_LANES D load3(const double* p) {
@@ -94,14 +103,16 @@ PHYMUL_LANES void store_rows(const V3& u, D* rows, int stride) {
   rows[3 * stride] = __builtin_shufflevector(xy13, z13, 2, 3, 6, 7);
 }
 
-// p[0..2] -= row[0..2].
-PHYMUL_LANES void subtract3(double* p, const D& row) {
-#if defined(__AVX__)
-  const __m256i xyz = _mm256_set_epi64x(0, -1, -1, -1);
-  _mm256_maskstore_pd(p, xyz, _mm256_maskload_pd(p, xyz) - row);
-#else
-  for (int a = 0; a < 3; ++a) p[a] -= row[a];
-#endif
+// p[0..2] -= row[0..2], by a pair and a single: a masked store would not forward to the next
+// load of the same node (the next lanes' neighbours are largely the same), and costs twice.
+PHYMUL_LANES void subtract3(double* p, const double* row) {
+  using Pair = double __attribute__((vector_size(2 * sizeof(double))));
+  Pair xy, r;
+  std::memcpy(&xy, p, sizeof xy);
+  std::memcpy(&r, row, sizeof r);
+  xy -= r;
+  std::memcpy(p, &xy, sizeof xy);
+  p[2] -= row[2];
 }
 
 PHYMUL_LANES V3 times(const M3& M, const V3& u) {
@@ -407,12 +418,18 @@ double add_polar_batch_forces(const ShapeMemory& m, const std::array<int, W>& ks
     ok &= solve_positive_definite(rotation_hessian(transpose_times(R, A)),
                                   cross(fit.c, transpose_times(R, pull)) * stiffness, half_mu);
     const V3 share = fi / fit.count;
-    for (int j = 0; j < n; ++j) {
+    auto reaction_on = [&](int j) {
       const V3 e = r[j] - fit.mean_r;  // X_j - G0
-      r[j] = share + times(R, cross(half_mu, e));
+      return share + times(R, cross(half_mu, e));
+    };
+    constexpr int rows = kShapeMemoryMaxBatchedNeighbours;
+    if (normal_pair) {
+      for (int j = 0; j < n; ++j) r[j] = reaction_on(j);
+      add_normal_reaction(m, n, dx, fit, normal, R, half_mu, r);
+      for (int j = 0; j < n; ++j) store_rows(r[j], &reaction[0][j], rows);
+    } else {
+      for (int j = 0; j < n; ++j) store_rows(reaction_on(j), &reaction[0][j], rows);
     }
-    if (normal_pair) add_normal_reaction(m, n, dx, fit, normal, R, half_mu, r);
-    for (int j = 0; j < n; ++j) store_rows(r[j], &reaction[0][j], kShapeMemoryMaxBatchedNeighbours);
   }
 
   double total = 0.0;
@@ -426,7 +443,8 @@ double add_polar_batch_forces(const ShapeMemory& m, const std::array<int, W>& ks
     rotations[ks[l]] = Eigen::Quaterniond(q.w[l], q.x[l], q.y[l], q.z[l]);
     f[node[l]] += Vec3(fi.v[0][l], fi.v[1][l], fi.v[2][l]);
     if (m.reaction)
-      for (int j = 0; j < n; ++j) subtract3(forces + 3 * nb[l][j], reaction[l][j]);
+      for (int j = 0; j < n; ++j)
+        subtract3(forces + 3 * nb[l][j], reinterpret_cast<const double*>(&reaction[l][j]));
     total += energy[l];
   }
   return total;
