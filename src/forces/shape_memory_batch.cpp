@@ -329,80 +329,119 @@ PHYMUL_LANES void add_normal_reaction(const ShapeMemory& m, int n, const V3* dx,
 
 }  // namespace
 
-double add_polar_batch_forces(const ShapeMemory& m, const std::array<int, W>& ks,
-                              std::span<const Vec3> rest, std::span<const Vec3> x,
-                              std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f,
-                              std::array<bool, W>* batched) {
-  const int n = int(m.neighbours.row(ks[0]).size());
+namespace {
+
+// One batch between its phases: the fit, the rotation's Newton turns, the forces.
+struct Batch {
+  std::array<int, W> ks;
+  int n;
   int node[W];
   const int* nb[W];
-  for (int l = 0; l < W; ++l) {
-    node[l] = m.nodes[ks[l]];
-    nb[l] = m.neighbours.row(ks[l]).data();
-  }
+  bool normal_pair;
   LaneFit fit;
-  fit.xi = gather(x, node);
-  const V3 Xi = gather(rest, node);
+  LaneNormal normal;
   V3 r[kShapeMemoryMaxBatchedNeighbours];   // X_j - X_i, later the neighbours' reactions
   V3 dx[kShapeMemoryMaxBatchedNeighbours];  // x_j - x_i
-  {
-    // Two passes: the gathers and sums, then the products; in one, their 18 accumulators
-    // would not fit the 16 vector registers.
-    // (Plain lane vectors as accumulators: GCC keeps them in registers, not V3's arrays.)
-    D sdx{}, sdy{}, sdz{}, srx{}, sry{}, srz{}, sXx{}, sXy{}, sXz{};
-    for (int j = 0; j < n; ++j) {
-      const int id[W] = {nb[0][j], nb[1][j], nb[2][j], nb[3][j]};
-      const V3 Xj = gather(rest, id);
-      const V3 d = gather(x, id) - fit.xi, rj = Xj - Xi;
-      for (int a = 0; a < 3; ++a) dx[j].v[a] = d.v[a], r[j].v[a] = rj.v[a];
-      sdx += d.v[0], sdy += d.v[1], sdz += d.v[2];
-      srx += rj.v[0], sry += rj.v[1], srz += rj.v[2];
-      sXx += Xj.v[0], sXy += Xj.v[1], sXz += Xj.v[2];
-    }
-    const V3 sum_d{{sdx, sdy, sdz}}, sum_r{{srx, sry, srz}}, sum_X{{sXx, sXy, sXz}};
-    M3 P{};
-    for (int j = 0; j < n; ++j)
-      for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b) P.a[a][b] += dx[j].v[a] * r[j].v[b];
-    fit.count = splat(double(n));
-    fit.sum_d = sum_d;
-    fit.g = fit.xi + sum_d / fit.count;
-    fit.mean_r = sum_r / fit.count;
-    fit.c = Xi - sum_X / fit.count;
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) fit.A.a[a][b] = P.a[a][b] - sum_d.v[a] * fit.mean_r.v[b];
-  }
-  const bool normal_pair = m.framed.find(ks[0]) >= 0;
-  LaneNormal normal;
-  if (normal_pair) add_normal_pair(m, ks, n, dx, r, fit, normal);
-  const M3& A = fit.A;
+  Q q;                                      // warm start, then the settled rotation
+  Mask active, failed;                      // lanes still turning, lanes for the scalar path
+};
 
-  // Newton turns of the rotation, as rotation_iteration, until they settle it as
-  // extract_rotation decides (below 1e-8 rad, the next turn being of its square). A lane
-  // that needs a turn of the linear fallback or of 0.1 rad or more, or more than kMaxTurns
-  // turns, redoes its node on the scalar path.
-  constexpr int kMaxTurns = 6;
-  Q q{D{rotations[ks[0]].w(), rotations[ks[1]].w(), rotations[ks[2]].w(), rotations[ks[3]].w()},
-      D{rotations[ks[0]].x(), rotations[ks[1]].x(), rotations[ks[2]].x(), rotations[ks[3]].x()},
-      D{rotations[ks[0]].y(), rotations[ks[1]].y(), rotations[ks[2]].y(), rotations[ks[3]].y()},
-      D{rotations[ks[0]].z(), rotations[ks[1]].z(), rotations[ks[2]].z(), rotations[ks[3]].z()}};
-  Mask active = Mask{} == 0, failed = Mask{};
-  for (int it = 0; it < kMaxTurns && any(active); ++it) {
-    const M3 S = transpose_times(rotation_matrix(q), A);
-    V3 half;  // of the turn theta = 2 H^-1 axial(skew(S))
-    const Mask newton = solve_positive_definite(rotation_hessian(S), axial_of_skew(S), half);
-    const V3 theta = half * splat(2.0);
-    const D angle2 = dot(theta, theta);
-    const Mask bad = active & ~(newton & (angle2 < 1e-2));
-    failed |= bad;
-    active &= ~bad;
-    const Mask move = active & (angle2 != 0.0);  // a zero turn leaves q as it is
-    const Q turned = turn(q, half);
-    q = Q{move ? turned.w : q.w, move ? turned.x : q.x, move ? turned.y : q.y,
-          move ? turned.z : q.z};
-    active &= ~(angle2 < 1e-16);
+void fit_batch(const ShapeMemory& m, const int* ks, std::span<const Vec3> rest,
+               std::span<const Vec3> x, std::span<const Eigen::Quaterniond> rotations, Batch& b) {
+  std::copy_n(ks, W, b.ks.begin());
+  const int n = b.n = int(m.neighbours.row(ks[0]).size());
+  for (int l = 0; l < W; ++l) {
+    b.node[l] = m.nodes[ks[l]];
+    b.nb[l] = m.neighbours.row(ks[l]).data();
   }
-  Mask ok = ~(failed | active);
+  LaneFit& fit = b.fit;
+  fit.xi = gather(x, b.node);
+  const V3 Xi = gather(rest, b.node);
+  // Two passes: the gathers and sums, then the products; in one, their 18 accumulators
+  // would not fit the 16 vector registers.
+  // (Plain lane vectors as accumulators: GCC keeps them in registers, not V3's arrays.)
+  D sdx{}, sdy{}, sdz{}, srx{}, sry{}, srz{}, sXx{}, sXy{}, sXz{};
+  for (int j = 0; j < n; ++j) {
+    const int id[W] = {b.nb[0][j], b.nb[1][j], b.nb[2][j], b.nb[3][j]};
+    const V3 Xj = gather(rest, id);
+    const V3 d = gather(x, id) - fit.xi, rj = Xj - Xi;
+    for (int a = 0; a < 3; ++a) b.dx[j].v[a] = d.v[a], b.r[j].v[a] = rj.v[a];
+    sdx += d.v[0], sdy += d.v[1], sdz += d.v[2];
+    srx += rj.v[0], sry += rj.v[1], srz += rj.v[2];
+    sXx += Xj.v[0], sXy += Xj.v[1], sXz += Xj.v[2];
+  }
+  const V3 sum_d{{sdx, sdy, sdz}}, sum_r{{srx, sry, srz}}, sum_X{{sXx, sXy, sXz}};
+  M3 P{};
+  for (int j = 0; j < n; ++j)
+    for (int a = 0; a < 3; ++a)
+      for (int c = 0; c < 3; ++c) P.a[a][c] += b.dx[j].v[a] * b.r[j].v[c];
+  fit.count = splat(double(n));
+  fit.sum_d = sum_d;
+  fit.g = fit.xi + sum_d / fit.count;
+  fit.mean_r = sum_r / fit.count;
+  fit.c = Xi - sum_X / fit.count;
+  for (int a = 0; a < 3; ++a)
+    for (int c = 0; c < 3; ++c) fit.A.a[a][c] = P.a[a][c] - sum_d.v[a] * fit.mean_r.v[c];
+  b.normal_pair = m.framed.find(ks[0]) >= 0;
+  if (b.normal_pair) add_normal_pair(m, b.ks, n, b.dx, b.r, fit, b.normal);
+  const Eigen::Quaterniond* q[W] = {&rotations[ks[0]], &rotations[ks[1]], &rotations[ks[2]],
+                                    &rotations[ks[3]]};
+  b.q = Q{
+      D{q[0]->w(), q[1]->w(), q[2]->w(), q[3]->w()}, D{q[0]->x(), q[1]->x(), q[2]->x(), q[3]->x()},
+      D{q[0]->y(), q[1]->y(), q[2]->y(), q[3]->y()}, D{q[0]->z(), q[1]->z(), q[2]->z(), q[3]->z()}};
+  b.active = Mask{} == 0;
+  b.failed = Mask{};
+}
+
+// Newton turns of the rotation, as rotation_iteration, until they settle it as
+// extract_rotation decides (below 1e-8 rad, the next turn being of its square). A lane that
+// needs a turn of the linear fallback or of 0.1 rad or more, or more than kMaxTurns turns,
+// redoes its node on the scalar path. A turn of a batch with no active lane changes nothing.
+constexpr int kMaxTurns = 6;
+
+PHYMUL_LANES void newton_turn(const M3& A, Q& q, Mask& active, Mask& failed) {
+  const M3 S = transpose_times(rotation_matrix(q), A);
+  V3 half;  // of the turn theta = 2 H^-1 axial(skew(S))
+  const Mask newton = solve_positive_definite(rotation_hessian(S), axial_of_skew(S), half);
+  const V3 theta = half * splat(2.0);
+  const D angle2 = dot(theta, theta);
+  const Mask bad = active & ~(newton & (angle2 < 1e-2));
+  failed |= bad;
+  active &= ~bad;
+  const Mask move = active & (angle2 != 0.0);  // a zero turn leaves q as it is
+  const Q turned = turn(q, half);
+  q = Q{move ? turned.w : q.w, move ? turned.x : q.x, move ? turned.y : q.y, move ? turned.z : q.z};
+  active &= ~(angle2 < 1e-16);
+}
+
+void settle_rotations(Batch& b) {
+  Q q = b.q;
+  for (int it = 0; it < kMaxTurns && any(b.active); ++it)
+    newton_turn(b.fit.A, q, b.active, b.failed);
+  b.q = q;
+}
+
+// Two batches' turns side by side: each turn is a chain of dependent operations, and two
+// chains keep the floating-point units busier than one.
+void settle_rotations(Batch& a, Batch& b) {
+  Q qa = a.q, qb = b.q;
+  for (int it = 0; it < kMaxTurns && any(a.active | b.active); ++it) {
+    newton_turn(a.fit.A, qa, a.active, a.failed);
+    newton_turn(b.fit.A, qb, b.active, b.failed);
+  }
+  a.q = qa;
+  b.q = qb;
+}
+
+// The pull, its reaction on the neighbours and their scatter into f; lanes that did not settle
+// redo their node on the scalar path, in lane order.
+double add_batch_forces(const ShapeMemory& m, Batch& b, std::span<const Vec3> rest,
+                        std::span<const Vec3> x, std::span<Eigen::Quaterniond> rotations,
+                        std::span<Vec3> f, std::array<bool, W>* batched) {
+  const int n = b.n;
+  const LaneFit& fit = b.fit;
+  const Q& q = b.q;
+  Mask ok = ~(b.failed | b.active);
   const M3 R = rotation_matrix(q);
 
   const D stiffness = splat(m.stiffness);
@@ -415,18 +454,18 @@ double add_polar_batch_forces(const ShapeMemory& m, const std::array<int, W>& ks
     // add_centroid_reaction and add_rotation_reaction: neighbour j gets
     // -(f_i / n + R (mu x (X_j - G0)) / 2), mu = 2 H^-1 K (c x R^T pull).
     V3 half_mu;
-    ok &= solve_positive_definite(rotation_hessian(transpose_times(R, A)),
+    ok &= solve_positive_definite(rotation_hessian(transpose_times(R, fit.A)),
                                   cross(fit.c, transpose_times(R, pull)) * stiffness, half_mu);
     const V3 share = fi / fit.count;
     auto reaction_on = [&](int j) {
-      const V3 e = r[j] - fit.mean_r;  // X_j - G0
+      const V3 e = b.r[j] - fit.mean_r;  // X_j - G0
       return share + times(R, cross(half_mu, e));
     };
     constexpr int rows = kShapeMemoryMaxBatchedNeighbours;
-    if (normal_pair) {
-      for (int j = 0; j < n; ++j) r[j] = reaction_on(j);
-      add_normal_reaction(m, n, dx, fit, normal, R, half_mu, r);
-      for (int j = 0; j < n; ++j) store_rows(r[j], &reaction[0][j], rows);
+    if (b.normal_pair) {
+      for (int j = 0; j < n; ++j) b.r[j] = reaction_on(j);
+      add_normal_reaction(m, n, b.dx, fit, b.normal, R, half_mu, b.r);
+      for (int j = 0; j < n; ++j) store_rows(b.r[j], &reaction[0][j], rows);
     } else {
       for (int j = 0; j < n; ++j) store_rows(reaction_on(j), &reaction[0][j], rows);
     }
@@ -437,17 +476,40 @@ double add_polar_batch_forces(const ShapeMemory& m, const std::array<int, W>& ks
   for (int l = 0; l < W; ++l) {
     if (batched) (*batched)[l] = ok[l] != 0;
     if (!ok[l]) {
-      total += add_polar_node_forces(m, ks[l], rest, x, rotations, f);
+      total += add_polar_node_forces(m, b.ks[l], rest, x, rotations, f);
       continue;
     }
-    rotations[ks[l]] = Eigen::Quaterniond(q.w[l], q.x[l], q.y[l], q.z[l]);
-    f[node[l]] += Vec3(fi.v[0][l], fi.v[1][l], fi.v[2][l]);
+    rotations[b.ks[l]] = Eigen::Quaterniond(q.w[l], q.x[l], q.y[l], q.z[l]);
+    f[b.node[l]] += Vec3(fi.v[0][l], fi.v[1][l], fi.v[2][l]);
     if (m.reaction)
       for (int j = 0; j < n; ++j)
-        subtract3(forces + 3 * nb[l][j], reinterpret_cast<const double*>(&reaction[l][j]));
+        subtract3(forces + 3 * b.nb[l][j], reinterpret_cast<const double*>(&reaction[l][j]));
     total += energy[l];
   }
   return total;
+}
+
+}  // namespace
+
+double add_polar_batch_forces(const ShapeMemory& m, const std::array<int, W>& ks,
+                              std::span<const Vec3> rest, std::span<const Vec3> x,
+                              std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f,
+                              std::array<bool, W>* batched) {
+  Batch b;
+  fit_batch(m, ks.data(), rest, x, rotations, b);
+  settle_rotations(b);
+  return add_batch_forces(m, b, rest, x, rotations, f, batched);
+}
+
+void add_polar_batch_pair_forces(const ShapeMemory& m, const int* ks, std::span<const Vec3> rest,
+                                 std::span<const Vec3> x, std::span<Eigen::Quaterniond> rotations,
+                                 std::span<Vec3> f, double& energy) {
+  Batch a, b;
+  fit_batch(m, ks, rest, x, rotations, a);
+  fit_batch(m, ks + W, rest, x, rotations, b);
+  settle_rotations(a, b);
+  energy += add_batch_forces(m, a, rest, x, rotations, f, nullptr);
+  energy += add_batch_forces(m, b, rest, x, rotations, f, nullptr);
 }
 
 }  // namespace phymul

@@ -32,4 +32,11 @@ double add_polar_batch_forces(const ShapeMemory& m, const std::array<int, kShape
                               std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f,
                               std::array<bool, kShapeMemoryLanes>* batched = nullptr);
 
+// Two batches, ks[0, lanes) then ks[lanes, 2 lanes), as two calls of add_polar_batch_forces
+// would do them (the same forces, rotations and energy, added to `energy` batch by batch), their
+// rotations' turns side by side.
+void add_polar_batch_pair_forces(const ShapeMemory& m, const int* ks, std::span<const Vec3> rest,
+                                 std::span<const Vec3> x, std::span<Eigen::Quaterniond> rotations,
+                                 std::span<Vec3> f, double& energy);
+
 }  // namespace phymul
