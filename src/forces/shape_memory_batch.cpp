@@ -270,14 +270,19 @@ PHYMUL_LANES void add_normal_pair(const ShapeMemory& m, const std::array<int, W>
                                   const V3* dx, const V3* r, LaneFit& fit, LaneNormal& normal) {
   const V3 mean_d = fit.sum_d / fit.count, mean_r = fit.mean_r;
   V3 N{}, N0{};
-  if (m.surface) {
+  if (m.surface) {  // each offset about the centroid computed once, carried to the next pair
+    const V3 first = dx[0] - mean_d, first0 = r[0] - mean_r;
+    V3 a = first, a0 = first0;
     for (int j = 0; j + 1 < n; ++j) {
-      N = N + cross(dx[j] - mean_d, dx[j + 1] - mean_d);
-      N0 = N0 + cross(r[j] - mean_r, r[j + 1] - mean_r);
+      const V3 b = dx[j + 1] - mean_d, b0 = r[j + 1] - mean_r;
+      N = N + cross(a, b);
+      N0 = N0 + cross(a0, b0);
+      a = b;
+      a0 = b0;
     }
     if (n > 2) {
-      N = N + cross(dx[n - 1] - mean_d, dx[0] - mean_d);
-      N0 = N0 + cross(r[n - 1] - mean_r, r[0] - mean_r);
+      N = N + cross(a, first);
+      N0 = N0 + cross(a0, first0);
     }
   } else {
     V3 rest_offset[2];
@@ -313,7 +318,10 @@ PHYMUL_LANES void add_normal_reaction(const ShapeMemory& m, int n, const V3* dx,
   const V3 h = times(R, cross(half_mu, normal.rest_normal)) * normal.weight;
   const V3 hp = (h - normal.unit_normal * dot(normal.unit_normal, h)) / normal.normal_length;
   if (m.surface) {
-    for (int j = 0; j < n; ++j) r[j] = r[j] + cross(dx[(j + 1) % n] - dx[(j + n - 1) % n], hp);
+    for (int j = 0; j < n; ++j) {  // (no modulo: an integer division each)
+      const int next = j + 1 == n ? 0 : j + 1, previous = j == 0 ? n - 1 : j - 1;
+      r[j] = r[j] + cross(dx[next] - dx[previous], hp);
+    }
     return;
   }
   // N = (x_a - g) x (x_b - g): a and b, and every neighbour through g
