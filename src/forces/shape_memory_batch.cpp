@@ -52,7 +52,11 @@ PHYMUL_LANES V3 cross(const V3& a, const V3& b) {
 }
 PHYMUL_LANES D splat(double s) { return D{} + s; }
 PHYMUL_LANES D lane_sqrt(const D& v) {
+#if defined(__AVX__)
+  return _mm256_sqrt_pd(v);  // correctly rounded, as std::sqrt
+#else
   return D{std::sqrt(v[0]), std::sqrt(v[1]), std::sqrt(v[2]), std::sqrt(v[3])};
+#endif
 }
 // Masks hold all ones (true) or zeros per lane.
 PHYMUL_LANES int sign_bits(const Mask& m) {
@@ -310,21 +314,16 @@ PHYMUL_LANES void add_normal_pair(const ShapeMemory& m, const std::array<int, W>
       fit.A.a[a][b] += normal.weight * normal.unit_normal.v[a] * normal.rest_normal.v[b];
 }
 
-// The reactions' share of the normal pair, dE = h'.dN through the normal's cross products,
-// added to the neighbours' reactions r.
-PHYMUL_LANES void add_normal_reaction(const ShapeMemory& m, int n, const V3* dx, const LaneFit& fit,
-                                      const LaneNormal& normal, const M3& R, const V3& half_mu,
-                                      V3* r) {
+// The normal pair's part of the reactions: dE = hp'.dN, N the unnormalised normal.
+PHYMUL_LANES V3 normal_gradient(const LaneNormal& normal, const M3& R, const V3& half_mu) {
   const V3 h = times(R, cross(half_mu, normal.rest_normal)) * normal.weight;
-  const V3 hp = (h - normal.unit_normal * dot(normal.unit_normal, h)) / normal.normal_length;
-  if (m.surface) {
-    for (int j = 0; j < n; ++j) {  // (no modulo: an integer division each)
-      const int next = j + 1 == n ? 0 : j + 1, previous = j == 0 ? n - 1 : j - 1;
-      r[j] = r[j] + cross(dx[next] - dx[previous], hp);
-    }
-    return;
-  }
-  // N = (x_a - g) x (x_b - g): a and b, and every neighbour through g
+  return (h - normal.unit_normal * dot(normal.unit_normal, h)) / normal.normal_length;
+}
+
+// A flat interior neighbourhood's: N = (x_a - g) x (x_b - g), on a and b, and every neighbour
+// through g, added to the neighbours' reactions r.
+PHYMUL_LANES void add_pair_normal_reaction(int n, const LaneFit& fit, const LaneNormal& normal,
+                                           const V3& hp, V3* r) {
   const V3 ga = cross(normal.pair_offset[1], hp), gb = cross(hp, normal.pair_offset[0]);
   const V3 through_centroid = (ga + gb) / fit.count;
   for (int j = 0; j < n; ++j) r[j] = r[j] - through_centroid;
@@ -470,12 +469,19 @@ double add_batch_forces(const ShapeMemory& m, Batch& b, std::span<const Vec3> re
       return share + times(R, cross(half_mu, e));
     };
     constexpr int rows = kShapeMemoryMaxBatchedNeighbours;
-    if (b.normal_pair) {
-      for (int j = 0; j < n; ++j) b.r[j] = reaction_on(j);
-      add_normal_reaction(m, n, b.dx, fit, b.normal, R, half_mu, b.r);
-      for (int j = 0; j < n; ++j) store_rows(b.r[j], &reaction[0][j], rows);
-    } else {
+    if (!b.normal_pair) {
       for (int j = 0; j < n; ++j) store_rows(reaction_on(j), &reaction[0][j], rows);
+    } else if (m.surface) {  // N = sum of e_j x e_j+1 around the ring: the centroid terms cancel
+      const V3 hp = normal_gradient(b.normal, R, half_mu);
+      for (int j = 0; j < n; ++j) {  // (no modulo: an integer division each)
+        const int next = j + 1 == n ? 0 : j + 1, previous = j == 0 ? n - 1 : j - 1;
+        const V3 rj = reaction_on(j);
+        store_rows(rj + cross(b.dx[next] - b.dx[previous], hp), &reaction[0][j], rows);
+      }
+    } else {
+      for (int j = 0; j < n; ++j) b.r[j] = reaction_on(j);
+      add_pair_normal_reaction(n, fit, b.normal, normal_gradient(b.normal, R, half_mu), b.r);
+      for (int j = 0; j < n; ++j) store_rows(b.r[j], &reaction[0][j], rows);
     }
   }
 
