@@ -200,8 +200,9 @@ PHYMUL_LANES Q turn(const Q& q, const V3& half) {
     scale = small ? scale : sinc_half;
   }
 #if defined(__AVX__)
-  // Unknown to the optimiser, the ones of small turns multiply as any value would: the
-  // products below are contracted into the same fused multiply-adds, rounded as before.
+  // Hidden from the optimiser, the ones of small turns multiply as the series' values do: GCC
+  // contracts the products below into the same fused multiply-adds either way (with known
+  // ones it would fold them and round the quaternion differently).
   asm("" : "+x"(rw), "+x"(scale));
 #endif
   const D hx = half.v[0] * scale, hy = half.v[1] * scale, hz = half.v[2] * scale;

@@ -1,7 +1,7 @@
 // The polar shape-memory pass, batched: kShapeMemoryLanes memory nodes of equal neighbour
-// count at a time, their fit, warm Newton rotation turn, pull and exact reaction computed in
-// vector lanes (structure of arrays). A lane whose single Newton turn would not settle the
-// rotation redoes its node on the scalar path (add_polar_node_forces).
+// count at a time, their fit, warm Newton rotation turns, pull and exact reaction computed in
+// vector lanes (structure of arrays). A lane whose Newton turns would not settle the rotation
+// as the scalar path does redoes its node on the scalar path (add_polar_node_forces).
 #pragma once
 
 #include <array>
