@@ -396,6 +396,8 @@ double add_polar_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::s
     double energy = 0.0;
     const int batched = m.batched_end[b], end = m.plan.block_start[b + 1];
     int p = m.plan.block_start[b];
+    for (; p + 2 * kShapeMemoryLanes <= batched; p += 2 * kShapeMemoryLanes)
+      add_polar_batch_pair_forces(m, m.batch_order.data() + p, rest, x, rotations, f, energy);
     for (; p < batched; p += kShapeMemoryLanes) {
       std::array<int, kShapeMemoryLanes> ks;
       std::copy_n(m.batch_order.begin() + p, kShapeMemoryLanes, ks.begin());

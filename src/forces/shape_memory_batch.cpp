@@ -2,7 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <vector>
+
+#if defined(__AVX__)
+#include <immintrin.h>
+#endif
 
 namespace phymul {
 namespace {
@@ -47,15 +52,71 @@ PHYMUL_LANES V3 cross(const V3& a, const V3& b) {
 }
 PHYMUL_LANES D splat(double s) { return D{} + s; }
 PHYMUL_LANES D lane_sqrt(const D& v) {
+#if defined(__AVX__)
+  return _mm256_sqrt_pd(v);  // correctly rounded, as std::sqrt
+#else
   return D{std::sqrt(v[0]), std::sqrt(v[1]), std::sqrt(v[2]), std::sqrt(v[3])};
+#endif
 }
-PHYMUL_LANES bool any(const Mask& m) { return (m[0] | m[1] | m[2] | m[3]) != 0; }
+// Masks hold all ones (true) or zeros per lane.
+PHYMUL_LANES int sign_bits(const Mask& m) {
+#if defined(__AVX__)
+  return _mm256_movemask_pd(__m256d(m));
+#else
+  return (m[0] ? 1 : 0) | (m[1] ? 2 : 0) | (m[2] ? 4 : 0) | (m[3] ? 8 : 0);
+#endif
+}
+PHYMUL_LANES bool any(const Mask& m) { return sign_bits(m) != 0; }
+PHYMUL_LANES bool all(const Mask& m) { return sign_bits(m) == (1 << W) - 1; }
+
+// (p[0], p[1], p[2], 0): one point, without reading past it (the last node of x, say).
+PHYMUL_LANES D load3(const double* p) {
+#if defined(__AVX__)
+  return _mm256_maskload_pd(p, _mm256_set_epi64x(0, -1, -1, -1));
+#else
+  return D{p[0], p[1], p[2], 0.0};
+#endif
+}
+
+// The rows (x, y, z, *) of four points as the lane vectors of their x, y and z.
+PHYMUL_LANES V3 transpose_rows(const D& a, const D& b, const D& c, const D& d) {
+  const D ab_xz = __builtin_shufflevector(a, b, 0, 4, 2, 6),
+          ab_y = __builtin_shufflevector(a, b, 1, 5, 3, 7);
+  const D cd_xz = __builtin_shufflevector(c, d, 0, 4, 2, 6),
+          cd_y = __builtin_shufflevector(c, d, 1, 5, 3, 7);
+  return {{__builtin_shufflevector(ab_xz, cd_xz, 0, 1, 4, 5),
+           __builtin_shufflevector(ab_y, cd_y, 0, 1, 4, 5),
+           __builtin_shufflevector(ab_xz, cd_xz, 2, 3, 6, 7)}};
+}
 
 // The W points p[id[l]].
 PHYMUL_LANES V3 gather(std::span<const Vec3> p, const int* id) {
-  const Vec3 &a = p[id[0]], &b = p[id[1]], &c = p[id[2]], &d = p[id[3]];
-  return {{D{a.x(), b.x(), c.x(), d.x()}, D{a.y(), b.y(), c.y(), d.y()},
-           D{a.z(), b.z(), c.z(), d.z()}}};
+  const double* base = p.data()->data();
+  return transpose_rows(load3(base + 3 * id[0]), load3(base + 3 * id[1]), load3(base + 3 * id[2]),
+                        load3(base + 3 * id[3]));
+}
+
+// Lane l of u as the row (x, y, z, *) in rows[l] (the inverse of transpose_rows).
+PHYMUL_LANES void store_rows(const V3& u, D* rows, int stride) {
+  const D xy02 = __builtin_shufflevector(u.v[0], u.v[1], 0, 4, 2, 6);
+  const D xy13 = __builtin_shufflevector(u.v[0], u.v[1], 1, 5, 3, 7);
+  const D z13 = __builtin_shufflevector(u.v[2], u.v[2], 1, 1, 3, 3);
+  rows[0] = __builtin_shufflevector(xy02, u.v[2], 0, 1, 4, 5);
+  rows[stride] = __builtin_shufflevector(xy13, z13, 0, 1, 4, 5);
+  rows[2 * stride] = __builtin_shufflevector(xy02, u.v[2], 2, 3, 6, 7);
+  rows[3 * stride] = __builtin_shufflevector(xy13, z13, 2, 3, 6, 7);
+}
+
+// p[0..2] -= row[0..2], by a pair and a single: a masked store would not forward to the next
+// load of the same node (the next lanes' neighbours are largely the same), and costs twice.
+PHYMUL_LANES void subtract3(double* p, const double* row) {
+  using Pair = double __attribute__((vector_size(2 * sizeof(double))));
+  Pair xy, r;
+  std::memcpy(&xy, p, sizeof xy);
+  std::memcpy(&r, row, sizeof r);
+  xy -= r;
+  std::memcpy(p, &xy, sizeof xy);
+  p[2] -= row[2];
 }
 
 PHYMUL_LANES V3 times(const M3& M, const V3& u) {
@@ -130,10 +191,20 @@ PHYMUL_LANES Mask solve_positive_definite(const Sym3& M, const V3& b, V3& y) {
 // a sqrt, a division and trigonometry. Then one Newton step for 1/|q| near 1 renormalises.
 PHYMUL_LANES Q turn(const Q& q, const V3& half) {
   const D h2 = dot(half, half);
-  const D cos_half = 1.0 - h2 / 2.0 * (1.0 - h2 / 12.0 * (1.0 - h2 / 30.0 * (1.0 - h2 / 56.0)));
-  const D sinc_half = 1.0 - h2 / 6.0 * (1.0 - h2 / 20.0 * (1.0 - h2 / 42.0 * (1.0 - h2 / 72.0)));
   const Mask small = 4.0 * h2 < 1e-8;
-  const D rw = small ? splat(1.0) : cos_half, scale = small ? splat(1.0) : sinc_half;
+  D rw = splat(1.0), scale = splat(1.0);
+  if (!all(small)) {  // a step's turns are nearly all small: no divisions on their path
+    const D cos_half = 1.0 - h2 / 2.0 * (1.0 - h2 / 12.0 * (1.0 - h2 / 30.0 * (1.0 - h2 / 56.0)));
+    const D sinc_half = 1.0 - h2 / 6.0 * (1.0 - h2 / 20.0 * (1.0 - h2 / 42.0 * (1.0 - h2 / 72.0)));
+    rw = small ? rw : cos_half;
+    scale = small ? scale : sinc_half;
+  }
+#if defined(__AVX__)
+  // Hidden from the optimiser, the ones of small turns multiply as the series' values do: GCC
+  // contracts the products below into the same fused multiply-adds either way (with known
+  // ones it would fold them and round the quaternion differently).
+  asm("" : "+x"(rw), "+x"(scale));
+#endif
   const D hx = half.v[0] * scale, hy = half.v[1] * scale, hz = half.v[2] * scale;
   Q t{q.w * rw - (q.x * hx + q.y * hy + q.z * hz), q.w * hx + q.x * rw + (q.y * hz - q.z * hy),
       q.w * hy + q.y * rw + (q.z * hx - q.x * hz), q.w * hz + q.z * rw + (q.x * hy - q.y * hx)};
@@ -181,161 +252,279 @@ void plan_polar_batches(ShapeMemory& m) {
   }
 }
 
-double add_polar_batch_forces(const ShapeMemory& m, const std::array<int, W>& ks,
-                              std::span<const Vec3> rest, std::span<const Vec3> x,
-                              std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f,
-                              std::array<bool, W>* batched) {
-  const int n = int(m.neighbours.row(ks[0]).size());
+namespace {
+
+// The fit of W neighbourhoods, as fit_neighbourhood: about the node itself, in one pass.
+struct LaneFit {
+  V3 xi, g, mean_r, c, sum_d;
+  M3 A;
+  D count;
+};
+
+// The normal pair, A += w N/|N| n0^T, N and n0 the current and rest normals about the centroid:
+// of the ordered ring on a surface (shape_memory.cpp's ring_normal), of the frame pair of a flat
+// interior neighbourhood, a box's corner (pair_normal).
+struct LaneNormal {
+  V3 unit_normal, rest_normal;
+  D normal_length, weight;
+  V3 pair_offset[2];           // x_a - g, x_b - g for the pair (a, b)
+  std::array<int, 2> pair[W];  // positions of a and b in each lane's row
+};
+
+PHYMUL_LANES void add_normal_pair(const ShapeMemory& m, const std::array<int, W>& ks, int n,
+                                  const V3* dx, const V3* r, LaneFit& fit, LaneNormal& normal) {
+  const V3 mean_d = fit.sum_d / fit.count, mean_r = fit.mean_r;
+  V3 N{}, N0{};
+  if (m.surface) {  // each offset about the centroid computed once, carried to the next pair
+    const V3 first = dx[0] - mean_d, first0 = r[0] - mean_r;
+    V3 a = first, a0 = first0;
+    for (int j = 0; j + 1 < n; ++j) {
+      const V3 b = dx[j + 1] - mean_d, b0 = r[j + 1] - mean_r;
+      N = N + cross(a, b);
+      N0 = N0 + cross(a0, b0);
+      a = b;
+      a0 = b0;
+    }
+    if (n > 2) {
+      N = N + cross(a, first);
+      N0 = N0 + cross(a0, first0);
+    }
+  } else {
+    V3 rest_offset[2];
+    for (int l = 0; l < W; ++l) {
+      normal.pair[l] = m.frame_pair[size_t(m.framed.find(ks[l]))];
+      for (int e = 0; e < 2; ++e)
+        for (int a = 0; a < 3; ++a) {
+          normal.pair_offset[e].v[a][l] = dx[normal.pair[l][e]].v[a][l];
+          rest_offset[e].v[a][l] = r[normal.pair[l][e]].v[a][l];
+        }
+    }
+    for (int e = 0; e < 2; ++e) {
+      normal.pair_offset[e] = normal.pair_offset[e] - mean_d;
+      rest_offset[e] = rest_offset[e] - mean_r;
+    }
+    N = cross(normal.pair_offset[0], normal.pair_offset[1]);
+    N0 = cross(rest_offset[0], rest_offset[1]);
+  }
+  normal.normal_length = lane_sqrt(dot(N, N));
+  normal.unit_normal = N / normal.normal_length;
+  normal.rest_normal = N0 / lane_sqrt(dot(N0, N0));
+  for (int l = 0; l < W; ++l) normal.weight[l] = m.normal_weight[size_t(m.framed.find(ks[l]))];
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b)
+      fit.A.a[a][b] += normal.weight * normal.unit_normal.v[a] * normal.rest_normal.v[b];
+}
+
+// The normal pair's part of the reactions: dE = hp'.dN, N the unnormalised normal.
+PHYMUL_LANES V3 normal_gradient(const LaneNormal& normal, const M3& R, const V3& half_mu) {
+  const V3 h = times(R, cross(half_mu, normal.rest_normal)) * normal.weight;
+  return (h - normal.unit_normal * dot(normal.unit_normal, h)) / normal.normal_length;
+}
+
+// A flat interior neighbourhood's: N = (x_a - g) x (x_b - g), on a and b, and every neighbour
+// through g, added to the neighbours' reactions r.
+PHYMUL_LANES void add_pair_normal_reaction(int n, const LaneFit& fit, const LaneNormal& normal,
+                                           const V3& hp, V3* r) {
+  const V3 ga = cross(normal.pair_offset[1], hp), gb = cross(hp, normal.pair_offset[0]);
+  const V3 through_centroid = (ga + gb) / fit.count;
+  for (int j = 0; j < n; ++j) r[j] = r[j] - through_centroid;
+  for (int l = 0; l < W; ++l)
+    for (int a = 0; a < 3; ++a) {
+      r[normal.pair[l][0]].v[a][l] += ga.v[a][l];
+      r[normal.pair[l][1]].v[a][l] += gb.v[a][l];
+    }
+}
+
+}  // namespace
+
+namespace {
+
+// One batch between its phases: the fit, the rotation's Newton turns, the forces.
+struct Batch {
+  std::array<int, W> ks;
+  int n;
   int node[W];
   const int* nb[W];
-  for (int l = 0; l < W; ++l) {
-    node[l] = m.nodes[ks[l]];
-    nb[l] = m.neighbours.row(ks[l]).data();
-  }
-  // The fit, as fit_neighbourhood: about the node itself, in one pass.
-  const V3 xi = gather(x, node), Xi = gather(rest, node);
-  V3 sum_d{}, sum_r{}, sum_X{};
-  M3 P{};
+  bool normal_pair;
+  LaneFit fit;
+  LaneNormal normal;
   V3 r[kShapeMemoryMaxBatchedNeighbours];   // X_j - X_i, later the neighbours' reactions
   V3 dx[kShapeMemoryMaxBatchedNeighbours];  // x_j - x_i
-  for (int j = 0; j < n; ++j) {
-    const int id[W] = {nb[0][j], nb[1][j], nb[2][j], nb[3][j]};
-    const V3 Xj = gather(rest, id);
-    const V3 d = gather(x, id) - xi;
-    dx[j] = d;
-    r[j] = Xj - Xi;
-    sum_d = sum_d + d;
-    sum_r = sum_r + r[j];
-    sum_X = sum_X + Xj;
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) P.a[a][b] += d.v[a] * r[j].v[b];
-  }
-  const D count = splat(double(n));
-  const V3 g = xi + sum_d / count, mean_r = sum_r / count, c = Xi - sum_X / count;
-  M3 A;
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b) A.a[a][b] = P.a[a][b] - sum_d.v[a] * mean_r.v[b];
-  // The normal pair, A += w N/|N| n0^T, N and n0 the current and rest normals about the
-  // centroid: of the ordered ring on a surface (shape_memory.cpp's ring_normal), of the frame
-  // pair of a flat interior neighbourhood, a box's corner (pair_normal).
-  const bool normal_pair = m.framed.find(ks[0]) >= 0;
-  const bool ring = normal_pair && m.surface;
-  V3 unit_normal{}, rest_normal{};
-  D normal_length{}, weight{};
-  V3 pair_offset[2]{};           // x_a - g, x_b - g for the pair (a, b)
-  std::array<int, 2> pair[W]{};  // positions of a and b in each lane's row
-  if (normal_pair) {
-    const V3 mean_d = sum_d / count;
-    V3 N{}, N0{};
-    if (ring) {
-      for (int j = 0; j + 1 < n; ++j) {
-        N = N + cross(dx[j] - mean_d, dx[j + 1] - mean_d);
-        N0 = N0 + cross(r[j] - mean_r, r[j + 1] - mean_r);
-      }
-      if (n > 2) {
-        N = N + cross(dx[n - 1] - mean_d, dx[0] - mean_d);
-        N0 = N0 + cross(r[n - 1] - mean_r, r[0] - mean_r);
-      }
-    } else {
-      V3 rest_offset[2]{};
-      for (int l = 0; l < W; ++l) {
-        pair[l] = m.frame_pair[size_t(m.framed.find(ks[l]))];
-        for (int e = 0; e < 2; ++e)
-          for (int a = 0; a < 3; ++a) {
-            pair_offset[e].v[a][l] = dx[pair[l][e]].v[a][l];
-            rest_offset[e].v[a][l] = r[pair[l][e]].v[a][l];
-          }
-      }
-      for (int e = 0; e < 2; ++e) {
-        pair_offset[e] = pair_offset[e] - mean_d;
-        rest_offset[e] = rest_offset[e] - mean_r;
-      }
-      N = cross(pair_offset[0], pair_offset[1]);
-      N0 = cross(rest_offset[0], rest_offset[1]);
-    }
-    normal_length = lane_sqrt(dot(N, N));
-    unit_normal = N / normal_length;
-    rest_normal = N0 / lane_sqrt(dot(N0, N0));
-    for (int l = 0; l < W; ++l) weight[l] = m.normal_weight[size_t(m.framed.find(ks[l]))];
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) A.a[a][b] += weight * unit_normal.v[a] * rest_normal.v[b];
-  }
+  Q q;                                      // warm start, then the settled rotation
+  Mask active, failed;                      // lanes still turning, lanes for the scalar path
+};
 
-  // Newton turns of the rotation, as rotation_iteration, until they settle it as
-  // extract_rotation decides (below 1e-8 rad, the next turn being of its square). A lane
-  // that needs a turn of the linear fallback or of 0.1 rad or more, or more than kMaxTurns
-  // turns, redoes its node on the scalar path.
-  constexpr int kMaxTurns = 6;
-  Q q{D{rotations[ks[0]].w(), rotations[ks[1]].w(), rotations[ks[2]].w(), rotations[ks[3]].w()},
-      D{rotations[ks[0]].x(), rotations[ks[1]].x(), rotations[ks[2]].x(), rotations[ks[3]].x()},
-      D{rotations[ks[0]].y(), rotations[ks[1]].y(), rotations[ks[2]].y(), rotations[ks[3]].y()},
-      D{rotations[ks[0]].z(), rotations[ks[1]].z(), rotations[ks[2]].z(), rotations[ks[3]].z()}};
-  Mask active = Mask{} == 0, failed = Mask{};
-  for (int it = 0; it < kMaxTurns && any(active); ++it) {
-    const M3 S = transpose_times(rotation_matrix(q), A);
-    V3 half;  // of the turn theta = 2 H^-1 axial(skew(S))
-    const Mask newton = solve_positive_definite(rotation_hessian(S), axial_of_skew(S), half);
-    const V3 theta = half * splat(2.0);
-    const D angle2 = dot(theta, theta);
-    const Mask bad = active & ~(newton & (angle2 < 1e-2));
-    failed |= bad;
-    active &= ~bad;
-    const Mask move = active & (angle2 != 0.0);  // a zero turn leaves q as it is
-    const Q turned = turn(q, half);
-    q = Q{move ? turned.w : q.w, move ? turned.x : q.x, move ? turned.y : q.y,
-          move ? turned.z : q.z};
-    active &= ~(angle2 < 1e-16);
+void fit_batch(const ShapeMemory& m, const int* ks, std::span<const Vec3> rest,
+               std::span<const Vec3> x, std::span<const Eigen::Quaterniond> rotations, Batch& b) {
+  std::copy_n(ks, W, b.ks.begin());
+  const int n = b.n = int(m.neighbours.row(ks[0]).size());
+  for (int l = 0; l < W; ++l) {
+    b.node[l] = m.nodes[ks[l]];
+    b.nb[l] = m.neighbours.row(ks[l]).data();
   }
-  Mask ok = ~(failed | active);
+  LaneFit& fit = b.fit;
+  fit.xi = gather(x, b.node);
+  const V3 Xi = gather(rest, b.node);
+  // Two passes: the gathers and sums, then the products; in one, their 18 accumulators
+  // would not fit the 16 vector registers.
+  // (Plain lane vectors as accumulators: GCC keeps them in registers, not V3's arrays.)
+  D sdx{}, sdy{}, sdz{}, srx{}, sry{}, srz{}, sXx{}, sXy{}, sXz{};
+  for (int j = 0; j < n; ++j) {
+    const int id[W] = {b.nb[0][j], b.nb[1][j], b.nb[2][j], b.nb[3][j]};
+    const V3 Xj = gather(rest, id);
+    const V3 d = gather(x, id) - fit.xi, rj = Xj - Xi;
+    for (int a = 0; a < 3; ++a) b.dx[j].v[a] = d.v[a], b.r[j].v[a] = rj.v[a];
+    sdx += d.v[0], sdy += d.v[1], sdz += d.v[2];
+    srx += rj.v[0], sry += rj.v[1], srz += rj.v[2];
+    sXx += Xj.v[0], sXy += Xj.v[1], sXz += Xj.v[2];
+  }
+  const V3 sum_d{{sdx, sdy, sdz}}, sum_r{{srx, sry, srz}}, sum_X{{sXx, sXy, sXz}};
+  M3 P{};
+  for (int j = 0; j < n; ++j)
+    for (int a = 0; a < 3; ++a)
+      for (int c = 0; c < 3; ++c) P.a[a][c] += b.dx[j].v[a] * b.r[j].v[c];
+  fit.count = splat(double(n));
+  fit.sum_d = sum_d;
+  fit.g = fit.xi + sum_d / fit.count;
+  fit.mean_r = sum_r / fit.count;
+  fit.c = Xi - sum_X / fit.count;
+  for (int a = 0; a < 3; ++a)
+    for (int c = 0; c < 3; ++c) fit.A.a[a][c] = P.a[a][c] - sum_d.v[a] * fit.mean_r.v[c];
+  b.normal_pair = m.framed.find(ks[0]) >= 0;
+  if (b.normal_pair) add_normal_pair(m, b.ks, n, b.dx, b.r, fit, b.normal);
+  const Eigen::Quaterniond* q[W] = {&rotations[ks[0]], &rotations[ks[1]], &rotations[ks[2]],
+                                    &rotations[ks[3]]};
+  b.q = Q{
+      D{q[0]->w(), q[1]->w(), q[2]->w(), q[3]->w()}, D{q[0]->x(), q[1]->x(), q[2]->x(), q[3]->x()},
+      D{q[0]->y(), q[1]->y(), q[2]->y(), q[3]->y()}, D{q[0]->z(), q[1]->z(), q[2]->z(), q[3]->z()}};
+  b.active = Mask{} == 0;
+  b.failed = Mask{};
+}
+
+// Newton turns of the rotation, as rotation_iteration, until they settle it as
+// extract_rotation decides (below 1e-8 rad, the next turn being of its square). A lane that
+// needs a turn of the linear fallback or of 0.1 rad or more, or more than kMaxTurns turns,
+// redoes its node on the scalar path. A turn of a batch with no active lane changes nothing.
+constexpr int kMaxTurns = 6;
+
+PHYMUL_LANES void newton_turn(const M3& A, Q& q, Mask& active, Mask& failed) {
+  const M3 S = transpose_times(rotation_matrix(q), A);
+  V3 half;  // of the turn theta = 2 H^-1 axial(skew(S))
+  const Mask newton = solve_positive_definite(rotation_hessian(S), axial_of_skew(S), half);
+  const V3 theta = half * splat(2.0);
+  const D angle2 = dot(theta, theta);
+  const Mask bad = active & ~(newton & (angle2 < 1e-2));
+  failed |= bad;
+  active &= ~bad;
+  const Mask move = active & (angle2 != 0.0);  // a zero turn leaves q as it is
+  const Q turned = turn(q, half);
+  q = Q{move ? turned.w : q.w, move ? turned.x : q.x, move ? turned.y : q.y, move ? turned.z : q.z};
+  active &= ~(angle2 < 1e-16);
+}
+
+void settle_rotations(Batch& b) {
+  Q q = b.q;
+  for (int it = 0; it < kMaxTurns && any(b.active); ++it)
+    newton_turn(b.fit.A, q, b.active, b.failed);
+  b.q = q;
+}
+
+// Two batches' turns side by side: each turn is a chain of dependent operations, and two
+// chains keep the floating-point units busier than one.
+void settle_rotations(Batch& a, Batch& b) {
+  Q qa = a.q, qb = b.q;
+  for (int it = 0; it < kMaxTurns && any(a.active | b.active); ++it) {
+    newton_turn(a.fit.A, qa, a.active, a.failed);
+    newton_turn(b.fit.A, qb, b.active, b.failed);
+  }
+  a.q = qa;
+  b.q = qb;
+}
+
+// The pull, its reaction on the neighbours and their scatter into f; lanes that did not settle
+// redo their node on the scalar path, in lane order.
+double add_batch_forces(const ShapeMemory& m, Batch& b, std::span<const Vec3> rest,
+                        std::span<const Vec3> x, std::span<Eigen::Quaterniond> rotations,
+                        std::span<Vec3> f, std::array<bool, W>* batched) {
+  const int n = b.n;
+  const LaneFit& fit = b.fit;
+  const Q& q = b.q;
+  Mask ok = ~(b.failed | b.active);
   const M3 R = rotation_matrix(q);
 
   const D stiffness = splat(m.stiffness);
-  const V3 pull = g + times(R, c) - xi;
+  const V3 pull = fit.g + times(R, fit.c) - fit.xi;
   const V3 fi = pull * stiffness;
   const D energy = 0.5 * stiffness * dot(pull, pull);
+  // Lane l's reaction on its neighbour j, as a row (x, y, z, *) at reaction[l][j].
+  D reaction[W][kShapeMemoryMaxBatchedNeighbours];
   if (m.reaction) {
     // add_centroid_reaction and add_rotation_reaction: neighbour j gets
     // -(f_i / n + R (mu x (X_j - G0)) / 2), mu = 2 H^-1 K (c x R^T pull).
     V3 half_mu;
-    ok &= solve_positive_definite(rotation_hessian(transpose_times(R, A)),
-                                  cross(c, transpose_times(R, pull)) * stiffness, half_mu);
-    const V3 share = fi / count;
-    for (int j = 0; j < n; ++j) {
-      const V3 e = r[j] - mean_r;  // X_j - G0
-      r[j] = share + times(R, cross(half_mu, e));
-    }
-    if (normal_pair) {  // dE = h'.dN through the normal's cross products
-      const V3 h = times(R, cross(half_mu, rest_normal)) * weight;
-      const V3 hp = (h - unit_normal * dot(unit_normal, h)) / normal_length;
-      if (ring) {
-        for (int j = 0; j < n; ++j) r[j] = r[j] + cross(dx[(j + 1) % n] - dx[(j + n - 1) % n], hp);
-      } else {  // N = (x_a - g) x (x_b - g): a and b, and every neighbour through g
-        const V3 ga = cross(pair_offset[1], hp), gb = cross(hp, pair_offset[0]);
-        const V3 through_centroid = (ga + gb) / count;
-        for (int j = 0; j < n; ++j) r[j] = r[j] - through_centroid;
-        for (int l = 0; l < W; ++l)
-          for (int a = 0; a < 3; ++a) {
-            r[pair[l][0]].v[a][l] += ga.v[a][l];
-            r[pair[l][1]].v[a][l] += gb.v[a][l];
-          }
+    ok &= solve_positive_definite(rotation_hessian(transpose_times(R, fit.A)),
+                                  cross(fit.c, transpose_times(R, pull)) * stiffness, half_mu);
+    const V3 share = fi / fit.count;
+    auto reaction_on = [&](int j) {
+      const V3 e = b.r[j] - fit.mean_r;  // X_j - G0
+      return share + times(R, cross(half_mu, e));
+    };
+    constexpr int rows = kShapeMemoryMaxBatchedNeighbours;
+    if (!b.normal_pair) {
+      for (int j = 0; j < n; ++j) store_rows(reaction_on(j), &reaction[0][j], rows);
+    } else if (m.surface) {  // N = sum of e_j x e_j+1 around the ring: the centroid terms cancel
+      const V3 hp = normal_gradient(b.normal, R, half_mu);
+      for (int j = 0; j < n; ++j) {  // (no modulo: an integer division each)
+        const int next = j + 1 == n ? 0 : j + 1, previous = j == 0 ? n - 1 : j - 1;
+        const V3 rj = reaction_on(j);
+        store_rows(rj + cross(b.dx[next] - b.dx[previous], hp), &reaction[0][j], rows);
       }
+    } else {
+      for (int j = 0; j < n; ++j) b.r[j] = reaction_on(j);
+      add_pair_normal_reaction(n, fit, b.normal, normal_gradient(b.normal, R, half_mu), b.r);
+      for (int j = 0; j < n; ++j) store_rows(b.r[j], &reaction[0][j], rows);
     }
   }
 
   double total = 0.0;
+  double* const forces = f.data()->data();
   for (int l = 0; l < W; ++l) {
     if (batched) (*batched)[l] = ok[l] != 0;
     if (!ok[l]) {
-      total += add_polar_node_forces(m, ks[l], rest, x, rotations, f);
+      total += add_polar_node_forces(m, b.ks[l], rest, x, rotations, f);
       continue;
     }
-    rotations[ks[l]] = Eigen::Quaterniond(q.w[l], q.x[l], q.y[l], q.z[l]);
-    f[node[l]] += Vec3(fi.v[0][l], fi.v[1][l], fi.v[2][l]);
+    rotations[b.ks[l]] = Eigen::Quaterniond(q.w[l], q.x[l], q.y[l], q.z[l]);
+    f[b.node[l]] += Vec3(fi.v[0][l], fi.v[1][l], fi.v[2][l]);
     if (m.reaction)
-      for (int j = 0; j < n; ++j) f[nb[l][j]] -= Vec3(r[j].v[0][l], r[j].v[1][l], r[j].v[2][l]);
+      for (int j = 0; j < n; ++j)
+        subtract3(forces + 3 * b.nb[l][j], reinterpret_cast<const double*>(&reaction[l][j]));
     total += energy[l];
   }
   return total;
+}
+
+}  // namespace
+
+double add_polar_batch_forces(const ShapeMemory& m, const std::array<int, W>& ks,
+                              std::span<const Vec3> rest, std::span<const Vec3> x,
+                              std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f,
+                              std::array<bool, W>* batched) {
+  Batch b;
+  fit_batch(m, ks.data(), rest, x, rotations, b);
+  settle_rotations(b);
+  return add_batch_forces(m, b, rest, x, rotations, f, batched);
+}
+
+void add_polar_batch_pair_forces(const ShapeMemory& m, const int* ks, std::span<const Vec3> rest,
+                                 std::span<const Vec3> x, std::span<Eigen::Quaterniond> rotations,
+                                 std::span<Vec3> f, double& energy) {
+  Batch a, b;
+  fit_batch(m, ks, rest, x, rotations, a);
+  fit_batch(m, ks + W, rest, x, rotations, b);
+  settle_rotations(a, b);
+  energy += add_batch_forces(m, a, rest, x, rotations, f, nullptr);
+  energy += add_batch_forces(m, b, rest, x, rotations, f, nullptr);
 }
 
 }  // namespace phymul

@@ -1,7 +1,7 @@
 // The polar shape-memory pass, batched: kShapeMemoryLanes memory nodes of equal neighbour
-// count at a time, their fit, warm Newton rotation turn, pull and exact reaction computed in
-// vector lanes (structure of arrays). A lane whose single Newton turn would not settle the
-// rotation redoes its node on the scalar path (add_polar_node_forces).
+// count at a time, their fit, warm Newton rotation turns, pull and exact reaction computed in
+// vector lanes (structure of arrays). A lane whose Newton turns would not settle the rotation
+// as the scalar path does redoes its node on the scalar path (add_polar_node_forces).
 #pragma once
 
 #include <array>
@@ -31,5 +31,12 @@ double add_polar_batch_forces(const ShapeMemory& m, const std::array<int, kShape
                               std::span<const Vec3> rest, std::span<const Vec3> x,
                               std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f,
                               std::array<bool, kShapeMemoryLanes>* batched = nullptr);
+
+// Two batches, ks[0, lanes) then ks[lanes, 2 lanes), as two calls of add_polar_batch_forces
+// would do them (the same forces, rotations and energy, added to `energy` batch by batch), their
+// rotations' turns side by side.
+void add_polar_batch_pair_forces(const ShapeMemory& m, const int* ks, std::span<const Vec3> rest,
+                                 std::span<const Vec3> x, std::span<Eigen::Quaterniond> rotations,
+                                 std::span<Vec3> f, double& energy);
 
 }  // namespace phymul

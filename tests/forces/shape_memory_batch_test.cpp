@@ -142,6 +142,40 @@ TEST(ShapeMemoryBatch, SurfaceNodesAgreeWithTheScalarPath) {
   for (int trial = 0; trial < 5; ++trial) expect_agreement(model, rng);
 }
 
+// Two batches side by side give what two single batches give, bit for bit: their turns are
+// interleaved, nothing else (the scalar fallbacks included, in the same order).
+TEST(ShapeMemoryBatch, PairOfBatchesEqualsTwoBatches) {
+  const Model model = block();
+  const ShapeMemory& m = model.shape_memory[0];
+  std::mt19937 rng(17);
+  for (int trial = 0; trial < 3; ++trial) {
+    const Deformed d = deformed(model, rng);
+    std::vector<Vec3> f_single(d.x.size(), Vec3::Zero()), f_pair = f_single;
+    std::vector<Eigen::Quaterniond> q_single = d.rotations, q_pair = d.rotations;
+    double e_single = 0.0, e_pair = 0.0;
+    int pairs = 0, fell_back = 0;
+    for (int b = 0; b < m.plan.blocks(); ++b)
+      for (int p = m.plan.block_start[b]; p + 2 * W <= m.batched_end[b]; p += 2 * W, ++pairs) {
+        for (int half = 0; half < 2; ++half) {
+          std::array<int, W> ks;
+          std::copy_n(m.batch_order.begin() + p + half * W, W, ks.begin());
+          std::array<bool, W> batched;
+          e_single +=
+              add_polar_batch_forces(m, ks, model.rest_position, d.x, q_single, f_single, &batched);
+          for (bool lane : batched) fell_back += !lane;
+        }
+        add_polar_batch_pair_forces(m, m.batch_order.data() + p, model.rest_position, d.x, q_pair,
+                                    f_pair, e_pair);
+      }
+    ASSERT_GT(pairs, 20);
+    EXPECT_GT(fell_back, 5);  // some lanes of the pairs went the scalar way
+    EXPECT_EQ(e_pair, e_single);
+    for (size_t i = 0; i < d.x.size(); ++i) EXPECT_EQ(f_pair[i], f_single[i]) << "node " << i;
+    for (size_t k = 0; k < q_pair.size(); ++k)
+      EXPECT_EQ(q_pair[k].coeffs(), q_single[k].coeffs()) << "memory node " << k;
+  }
+}
+
 TEST(ShapeMemoryBatch, ZeroForceUnderARigidRotation) {
   const Model surface =
       testing::single_component(make_ellipsoid_surface({0.02, 0.015, 0.01}, 3),

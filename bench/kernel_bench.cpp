@@ -1,0 +1,74 @@
+// The shape-memory pass alone (forces/shape_memory.cpp and its batched kernel) on the step
+// benchmark's pushed cube, in the middle of its push: the rotations one step old, as a dynamic
+// step finds them, so that the lanes take the Newton turns a step takes. Reports the time per
+// memory node of one pass.
+#include <benchmark/benchmark.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <ctime>
+
+#include "cube.hpp"
+#include "forces/shape_memory.hpp"
+
+namespace {
+
+using namespace phymul;
+
+double thread_cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+
+struct Snapshot {
+  std::vector<Vec3> x;                       // at step s + 1
+  std::vector<Eigen::Quaterniond> rotation;  // fitted at step s
+};
+
+// The pushed cube stepped into its push (40 steps: top moved, the block deforming).
+Snapshot snapshot(Simulator& sim) {
+  for (int s = 0; s < 40; ++s) sim.step();
+  Snapshot snap;
+  snap.rotation = sim.state().rotation;
+  sim.step();
+  snap.x = sim.state().x;
+  return snap;
+}
+
+void BM_ShapeMemoryPass(benchmark::State& state) {
+  omp_set_num_threads(int(state.range(1)));
+  Simulator sim(bench::pushed_cube(int(state.range(0))));
+  const Snapshot snap = snapshot(sim);
+  const Model& model = sim.model();
+  const ShapeMemory& m = model.shape_memory[0];
+  std::vector<Eigen::Quaterniond> rotation = snap.rotation;
+  std::vector<Vec3> f(snap.x.size());
+  double energy = 0.0;
+  double seconds = 0.0, cpu_seconds = 0.0;
+  for (auto _ : state) {
+    std::copy(snap.rotation.begin(), snap.rotation.end(), rotation.begin());
+    std::fill(f.begin(), f.end(), Vec3::Zero());
+    const auto start = std::chrono::steady_clock::now();
+    const double cpu_start = thread_cpu_seconds();
+    energy = add_shape_memory_forces(m, model.rest_position, snap.x, rotation, f);
+    cpu_seconds += thread_cpu_seconds() - cpu_start;
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  benchmark::DoNotOptimize(energy);
+  state.counters["memory_nodes"] = double(m.nodes.size());
+  const double passes = double(m.nodes.size()) * double(state.iterations());
+  state.counters["ns_per_node"] = seconds * 1e9 / passes;
+  // This thread's CPU time (one thread): the pass's cost when a busy machine shares the core.
+  state.counters["cpu_ns_per_node"] = cpu_seconds * 1e9 / passes;
+}
+BENCHMARK(BM_ShapeMemoryPass)
+    ->Args({24, 1})
+    ->Args({40, 1})
+    ->Args({40, 2})
+    ->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
