@@ -3,7 +3,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+// The joint projection's loops over a surface's triangles and nodes take a node's three
+// coordinates in one AVX2 register where the build targets it (-march=native), and plain
+// Eigen otherwise: the same sums, in another order (results differ in the last bits).
 #if defined(__AVX2__) && defined(__FMA__)
+#define PHYMUL_VOLUME_AVX2 1
 #include <immintrin.h>
 #endif
 #include <vector>
@@ -56,14 +60,14 @@ double six_gradient(const Model& model, const VolumeConstraint& c, std::span<con
 
 double volume(const VolumeConstraint& c, std::span<const Vec3> x);
 
-#if defined(__AVX2__) && defined(__FMA__)
+#ifdef PHYMUL_VOLUME_AVX2
 // Three doubles in the lanes 0-2 of a register, 0 in the fourth; never read or written past.
-const __m256i kThree = _mm256_setr_epi64x(-1, -1, -1, 0);
+[[gnu::always_inline]] inline __m256i three_lanes() { return _mm256_setr_epi64x(-1, -1, -1, 0); }
 [[gnu::always_inline]] inline __m256d load3(const Vec3& v) {
-  return _mm256_maskload_pd(v.data(), kThree);
+  return _mm256_maskload_pd(v.data(), three_lanes());
 }
 [[gnu::always_inline]] inline void store3(Vec3& v, __m256d r) {
-  _mm256_maskstore_pd(v.data(), kThree, r);
+  _mm256_maskstore_pd(v.data(), three_lanes(), r);
 }
 // (y, z, x, w): the cross product a x b is a * yzx(b) - yzx(a) * b in the lanes (z, x, y).
 [[gnu::always_inline]] inline __m256d yzx(__m256d v) {
@@ -132,7 +136,7 @@ double directions_from_rotated(const Model& model, const VolumeConstraint& c,
 
 // The chord iterations' volumes: the same sum of a . (b x d) (lane by lane with AVX2).
 double volume(const VolumeConstraint& c, std::span<const Vec3> x) {
-#if defined(__AVX2__) && defined(__FMA__)
+#ifdef PHYMUL_VOLUME_AVX2
   const Vec3* __restrict p = x.data();
   __m256d six_volume = _mm256_setzero_pd();
   for (const Triangle& t : c.triangles) {
@@ -153,7 +157,7 @@ double local_dot(const VolumeConstraint& c, const Vec3* __restrict local,
                  const Vec3* __restrict field) {
   const int* __restrict nodes = c.nodes.data();
   const int n = int(c.nodes.size());
-#if defined(__AVX2__) && defined(__FMA__)
+#ifdef PHYMUL_VOLUME_AVX2
   __m256d sum = _mm256_setzero_pd();
   for (int m = 0; m < n; ++m) sum = _mm256_fmadd_pd(load3(local[m]), load3(field[nodes[m]]), sum);
   return lane_sum(sum);
@@ -170,7 +174,7 @@ void subtract_along(const VolumeConstraint& c, double s, const Vec3* __restrict 
                     const Vec3* __restrict w, Vec3* __restrict field) {
   const int* __restrict nodes = c.nodes.data();
   const int n = int(c.nodes.size());
-#if defined(__AVX2__) && defined(__FMA__)
+#ifdef PHYMUL_VOLUME_AVX2
   const __m256d factor = _mm256_set1_pd(s), sixth = _mm256_set1_pd(1.0 / 6.0);
   for (int m = 0; m < n; ++m) {
     Vec3& f = field[nodes[m]];
@@ -192,7 +196,7 @@ void subtract_along(const VolumeConstraint& c, double s, const Vec3* __restrict 
 double gradient_and_direction(const Model& model, const VolumeConstraint& c,
                               std::span<const Vec3> x, std::span<Vec3> grad, bool keep,
                               double& six_volume) {
-#if defined(__AVX2__) && defined(__FMA__)
+#ifdef PHYMUL_VOLUME_AVX2
   if (gathered(c)) {  // every corner is one of `nodes`: the scatter touches nothing else
     six_volume = rotated_six_gradient(model, c, x);
     return directions_from_rotated(model, c, x, grad, keep);
@@ -254,14 +258,14 @@ bool kept_linearisation_at(const Model& model, std::span<const Vec3> x) {
     const int* __restrict nodes = c.nodes.data();
     const Vec3* __restrict at = c.coupled_at.data();
     const int n = int(c.nodes.size());
-#if defined(__AVX2__) && defined(__FMA__)
+#ifdef PHYMUL_VOLUME_AVX2
     // Branch-free within blocks of 32 nodes: after a step's projection the first block
     // already differs, between steps every node is compared.
     for (int begin = 0; begin < n; begin += 32) {
       __m256d differ = _mm256_setzero_pd();
       for (int m = begin; m < std::min(n, begin + 32); ++m)
-        differ = _mm256_or_pd(differ, _mm256_cmp_pd(load3(at[m]), load3(x[size_t(nodes[m])]),
-                                                    _CMP_NEQ_UQ));
+        differ = _mm256_or_pd(differ,
+                              _mm256_cmp_pd(load3(at[m]), load3(x[size_t(nodes[m])]), _CMP_NEQ_UQ));
       if (!_mm256_testz_pd(differ, differ)) return false;
     }
 #else
