@@ -238,8 +238,9 @@ struct Model {
   // while every VolumeConstraint::coupled_at matches the positions.
   mutable std::vector<double> coupled_factor;
   mutable bool coupled_factor_valid = false;
-  // The joint projection's gradient scatter, per node and padded to four lanes (finalize).
-  mutable std::vector<Eigen::Vector4d> coupled_scatter;
+  // The joint projection's gradient scatter: 3 per node, as the positions, and one more so
+  // that four lanes can be read and written at the last node (finalize).
+  mutable std::vector<double> coupled_scatter;
   Vec3 gravity = Vec3::Zero();  // m/s^2
   double damping = 0.0;         // 1/s
   SimulationSpec settings;

@@ -30,7 +30,7 @@ Vec3 free_axes(const Vec3& inverse_mass) {
 bool usable(const Model& model) {
   if (model.volumes.empty() || model.volumes.size() > size_t(kMax)) return false;
   if (model.coupled_factor.size() != size_t(kMax * kMax) ||
-      model.coupled_scatter.size() != model.inverse_mass.size())
+      model.coupled_scatter.size() != 3 * model.inverse_mass.size() + 1)
     return false;
   for (const VolumeConstraint& c : model.volumes)
     if (c.coupled_direction.size() != c.nodes.size() ||
@@ -82,24 +82,30 @@ double volume(const VolumeConstraint& c, std::span<const Vec3> x);
   return (l[0] + l[1]) + (l[2] + l[3]);
 }
 
-// 6 dV/dx of c summed at its nodes in the padded scratch, in the rotated lanes (z, x, y);
-// returns 6 V. A triangle's three cross products take one register each: about half the
-// instructions of the scalar scatter, no spills.
+// 6 dV/dx of c summed at its nodes in the scratch, in the rotated lanes (z, x, y); returns
+// 6 V. A triangle's three cross products take one register each: about half the
+// instructions of the scalar scatter, no spills. The scratch has the positions' layout (one
+// index for both); a node's sum is read and written in four lanes, the fourth being the next
+// node's first: the cross products' fourth lane is 0, the sums are taken in turn, and that
+// lane is never read as a result.
 double rotated_six_gradient(const Model& model, const VolumeConstraint& c,
                             std::span<const Vec3> x) {
-  double* __restrict sum = model.coupled_scatter.data()->data();
-  const Vec3* __restrict p = x.data();
-  for (int i : c.nodes) _mm256_storeu_pd(sum + 4 * size_t(i), _mm256_setzero_pd());
+  double* __restrict sum = model.coupled_scatter.data();
+  const double* __restrict p = x.data()->data();
+  for (int i : c.nodes) _mm256_storeu_pd(sum + 3 * size_t(i), _mm256_setzero_pd());
   __m256d volume = _mm256_setzero_pd();
+  const __m256i three = three_lanes();
   for (const Triangle& t : c.triangles) {
-    const __m256d a = load3(p[t[0]]), b = load3(p[t[1]]), d = load3(p[t[2]]);
+    const size_t i0 = 3 * size_t(t[0]), i1 = 3 * size_t(t[1]), i2 = 3 * size_t(t[2]);
+    const __m256d a = _mm256_maskload_pd(p + i0, three), b = _mm256_maskload_pd(p + i1, three),
+                  d = _mm256_maskload_pd(p + i2, three);
     const __m256d ar = yzx(a), br = yzx(b), dr = yzx(d);
     const __m256d bd = _mm256_fmsub_pd(b, dr, _mm256_mul_pd(br, d));
     const __m256d da = _mm256_fmsub_pd(d, ar, _mm256_mul_pd(dr, a));
     const __m256d ab = _mm256_fmsub_pd(a, br, _mm256_mul_pd(ar, b));
-    double* s0 = sum + 4 * size_t(t[0]);
-    double* s1 = sum + 4 * size_t(t[1]);
-    double* s2 = sum + 4 * size_t(t[2]);
+    double* s0 = sum + i0;
+    double* s1 = sum + i1;
+    double* s2 = sum + i2;
     _mm256_storeu_pd(s0, _mm256_add_pd(_mm256_loadu_pd(s0), bd));
     _mm256_storeu_pd(s1, _mm256_add_pd(_mm256_loadu_pd(s1), da));
     _mm256_storeu_pd(s2, _mm256_add_pd(_mm256_loadu_pd(s2), ab));
@@ -111,7 +117,7 @@ double rotated_six_gradient(const Model& model, const VolumeConstraint& c,
 // The per-node part of gradient_and_direction from the rotated sums, four lanes at once.
 double directions_from_rotated(const Model& model, const VolumeConstraint& c,
                                std::span<const Vec3> x, std::span<Vec3> grad, bool keep) {
-  const double* __restrict sum = model.coupled_scatter.data()->data();
+  const double* __restrict sum = model.coupled_scatter.data();
   const int* __restrict nodes = c.nodes.data();
   const Vec3* __restrict w = model.inverse_mass.data();
   Vec3* __restrict g = grad.data();
@@ -123,7 +129,9 @@ double directions_from_rotated(const Model& model, const VolumeConstraint& c,
   const int n = int(c.nodes.size());
   for (int m = 0; m < n; ++m) {
     const int i = nodes[m];
-    const __m256d six = yzx(_mm256_loadu_pd(sum + 4 * size_t(i)));
+    // The fourth lane is the next node's: zero it.
+    const __m256d six =
+        _mm256_blend_pd(yzx(_mm256_loadu_pd(sum + 3 * size_t(i))), _mm256_setzero_pd(), 0b1000);
     const __m256d d = _mm256_mul_pd(sixth, _mm256_mul_pd(six, load3(w[i])));
     store3(g[i], six);
     store3(direction[m], d);
