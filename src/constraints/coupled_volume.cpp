@@ -58,8 +58,6 @@ double six_gradient(const Model& model, const VolumeConstraint& c, std::span<con
   return six_volume;
 }
 
-double volume(const VolumeConstraint& c, std::span<const Vec3> x);
-
 #ifdef PHYMUL_VOLUME_AVX2
 // Three doubles in the lanes 0-2 of a register, 0 in the fourth; never read or written past.
 [[gnu::always_inline]] inline __m256i three_lanes() { return _mm256_setr_epi64x(-1, -1, -1, 0); }
@@ -231,7 +229,7 @@ double gradient_and_direction(const Model& model, const VolumeConstraint& c,
 
 // At x: every direction d_k = w dV_k/dx (into the constraint's coupled_direction), the
 // symmetric G W G^T (a_kl = dV_k/dx . d_l, zero but on the nodes two surfaces share) and,
-// given `volumes`, each V_k. One gradient gather per surface; `keep`: each 6 dV_k/dx and x
+// given `volumes`, each V_k. One gradient pass per surface; `keep`: each 6 dV_k/dx and x
 // into the constraint's coupled_gradient, coupled_at.
 void linearise(const Model& model, std::span<const Vec3> x, std::span<Vec3> grad, Square& a,
                Column* volumes, bool keep) {
