@@ -82,6 +82,10 @@ struct VolumeConstraint {
   // The joint velocity projection's 6 dV/dx per node of `nodes`, and the positions it was
   // taken at: a step's last projection and the next step's first share them.
   mutable std::vector<Vec3> coupled_gradient, coupled_at;
+  // The nodes it shares with earlier constraints (finalize), where alone the joint
+  // projection's products of two gradients are not zero: {l, local index here, local index
+  // in volumes[l]}, by l then node.
+  std::vector<std::array<int, 3>> shared;
 };
 
 struct AppliedForce {
@@ -234,6 +238,9 @@ struct Model {
   // while every VolumeConstraint::coupled_at matches the positions.
   mutable std::vector<double> coupled_factor;
   mutable bool coupled_factor_valid = false;
+  // The joint projection's gradient scatter: 3 per node, as the positions, and one more so
+  // that four lanes can be read and written at the last node (finalize).
+  mutable std::vector<double> coupled_scatter;
   Vec3 gravity = Vec3::Zero();  // m/s^2
   double damping = 0.0;         // 1/s
   SimulationSpec settings;

@@ -35,16 +35,36 @@ bool violates(const RigidObstacle& o, double distance) {
   return o.keep_inside ? distance > 0.0 : distance < 0.0;
 }
 
-bool violates_at(const RigidObstacle& o, const Vec3& x, double load_time) {
-  return violates(o, obstacle_distance(o, x, load_time).distance);
+// Where the shape's reference point is at a load time: evaluated once per obstacle and
+// stage, not per node (the motion is a schedule to interpolate).
+Vec3 shape_base(const RigidObstacle& o, double load_time) {
+  return o.point + o.motion.at(load_time);
+}
+
+// obstacle_distance with the shape's base point already placed.
+SurfaceDistance distance_from(const RigidObstacle& o, const Vec3& base, const Vec3& x) {
+  switch (o.shape) {
+    case Shape::plane:
+      return {(x - base).dot(o.axis), o.axis};
+    case Shape::sphere:
+      return around(x, base, o.radius, o.axis);
+    case Shape::capsule:
+    case Shape::rounded_cylinder:
+      return around(x, core_point(o, base, x), o.radius, o.axis);
+  }
+  return {};
+}
+
+bool violates_at(const RigidObstacle& o, const Vec3& x, const Vec3& base) {
+  return violates(o, distance_from(o, base, x).distance);
 }
 
 // Moves one node onto the surface along its free axes P. A free node goes straight to the
 // closest point (exact for every shape). A partly held one moves along P n0 (n0: the normal
 // where it starts): Newton steps until it is out, then bisection back to the surface, since
 // on a curved surface a linearised step may overshoot far past it.
-void project_node(const RigidObstacle& o, const Vec3& free_axes, Vec3& x, double load_time) {
-  const SurfaceDistance s = obstacle_distance(o, x, load_time);
+void project_node(const RigidObstacle& o, const Vec3& free_axes, Vec3& x, const Vec3& base) {
+  const SurfaceDistance s = distance_from(o, base, x);
   if (!violates(o, s.distance)) return;
   if (free_axes == Vec3::Ones()) {
     x -= s.distance * s.normal;
@@ -54,10 +74,10 @@ void project_node(const RigidObstacle& o, const Vec3& free_axes, Vec3& x, double
   if (s.normal.dot(direction) < 1e-12) return;  // the normal lies on held axes: cannot move
   double inside = 0.0, outside = 0.0;           // step lengths along direction
   for (int pass = 0; pass < 8 && outside == 0.0; ++pass) {
-    const SurfaceDistance at = obstacle_distance(o, x + inside * direction, load_time);
+    const SurfaceDistance at = distance_from(o, base, x + inside * direction);
     const double rate = at.normal.dot(direction);
     const double next = rate > 0.0 ? inside - at.distance / rate : 2.0 * inside;
-    if (violates_at(o, x + next * direction, load_time))
+    if (violates_at(o, x + next * direction, base))
       inside = next;
     else
       outside = next;
@@ -65,7 +85,7 @@ void project_node(const RigidObstacle& o, const Vec3& free_axes, Vec3& x, double
   if (outside == 0.0) return;  // no way out along the free axes: leave it (best effort)
   for (int it = 0; it < 60 && outside - inside > 1e-15 * outside; ++it) {
     const double middle = 0.5 * (inside + outside);
-    (violates_at(o, x + middle * direction, load_time) ? inside : outside) = middle;
+    (violates_at(o, x + middle * direction, base) ? inside : outside) = middle;
   }
   x += outside * direction;
 }
@@ -84,31 +104,21 @@ Vec3 shape_shift(const RigidObstacle& o, double from, double to) {
 // else shortened by that much (slide). A container's wall curves inward, so the node is
 // projected once more.
 void apply_friction(const RigidObstacle& o, const Vec3& free, Vec3& x, const Vec3& x_start,
-                    const Vec3& shift, double normal, double load_time) {
-  const Vec3 n = obstacle_distance(o, x, load_time).normal;
+                    const Vec3& shift, double normal, const Vec3& base) {
+  const Vec3 n = distance_from(o, base, x).normal;
   Vec3 slip = (x - x_start) - shift;
   slip = (slip - slip.dot(n) * n).cwiseProduct(free);
   const double length = slip.norm();
   if (length == 0.0) return;
   const double bound = o.friction * normal;
   x -= (length <= bound ? 1.0 : bound / length) * slip;
-  project_node(o, free, x, load_time);
+  project_node(o, free, x, base);
 }
 
 }  // namespace
 
 SurfaceDistance obstacle_distance(const RigidObstacle& o, const Vec3& x, double load_time) {
-  const Vec3 base = o.point + o.motion.at(load_time);
-  switch (o.shape) {
-    case Shape::plane:
-      return {(x - base).dot(o.axis), o.axis};
-    case Shape::sphere:
-      return around(x, base, o.radius, o.axis);
-    case Shape::capsule:
-    case Shape::rounded_cylinder:
-      return around(x, core_point(o, base, x), o.radius, o.axis);
-  }
-  return {};
+  return distance_from(o, shape_base(o, load_time), x);
 }
 
 Vec3 closest_surface_point(const RigidObstacle& o, const Vec3& x, double load_time) {
@@ -118,11 +128,12 @@ Vec3 closest_surface_point(const RigidObstacle& o, const Vec3& x, double load_ti
 
 void project_obstacle(const RigidObstacle& o, std::span<const Vec3> inverse_mass, std::span<Vec3> x,
                       double load_time) {
+  const Vec3 base = shape_base(o, load_time);
   if (o.nodes.empty()) {
     for (size_t i = 0; i < x.size(); ++i)
-      project_node(o, free_axes_of(inverse_mass[i]), x[i], load_time);
+      project_node(o, free_axes_of(inverse_mass[i]), x[i], base);
   } else {
-    for (int i : o.nodes) project_node(o, free_axes_of(inverse_mass[i]), x[i], load_time);
+    for (int i : o.nodes) project_node(o, free_axes_of(inverse_mass[i]), x[i], base);
   }
 }
 
@@ -135,13 +146,14 @@ void apply_contacts(const Model& model, std::span<Vec3> x, double load_time, Con
   for (size_t k = 0; k < model.obstacles.size(); ++k) {
     const RigidObstacle& o = model.obstacles[k];
     const Vec3 shift = shape_shift(o, step.start_time, load_time);
+    const Vec3 base = shape_base(o, load_time);
     auto one = [&](int i) {
       const Vec3 free = free_axes_of(model.inverse_mass[i]);
       const Vec3 before = x[i];
-      project_node(o, free, x[i], load_time);
+      project_node(o, free, x[i], base);
       if (x[i] == before) return;
       if (o.friction > 0.0)
-        apply_friction(o, free, x[i], step.x_start[i], shift, (x[i] - before).norm(), load_time);
+        apply_friction(o, free, x[i], step.x_start[i], shift, (x[i] - before).norm(), base);
       step.touching[i] = int(k);
       step.impulse[k] += model.mass[i] * (x[i] - before) / step.dt;
     };
@@ -157,13 +169,19 @@ void apply_contact_velocities(const Model& model, std::span<const Vec3> x, std::
   if (step.deformable)
     apply_deformable_contact_velocities(model, v, *step.deformable, step.pair_impulse);
   if (model.obstacles.empty()) return;
+  int placed = -1;  // the obstacle whose base and velocity are below
+  Vec3 base = Vec3::Zero(), shape_velocity = Vec3::Zero();
   for (int i = 0; i < model.node_count(); ++i) {
     const int k = step.touching[i];
     if (k < 0) continue;
     const RigidObstacle& o = model.obstacles[size_t(k)];
-    const Vec3 n = obstacle_distance(o, x[i], load_time).normal;
+    if (k != placed) {
+      placed = k;
+      base = shape_base(o, load_time);
+      shape_velocity = shape_shift(o, step.start_time, load_time) / step.dt;
+    }
+    const Vec3 n = distance_from(o, base, x[i]).normal;
     const Vec3 push = o.keep_inside ? Vec3(-n) : n;  // the way the shape can push
-    const Vec3 shape_velocity = shape_shift(o, step.start_time, load_time) / step.dt;
     const Vec3 u = v[i] - shape_velocity;
     const double into = -u.dot(push);
     if (into <= 0.0) continue;  // already leaving the surface

@@ -3,6 +3,16 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+// The joint projection's loops over a surface's triangles and nodes take a node's three
+// coordinates in one AVX2 register where the build targets it (-march=native), and plain
+// Eigen otherwise: the same sums, in another order (results differ in the last bits).
+#if defined(__AVX2__) && defined(__FMA__)
+#define PHYMUL_VOLUME_AVX2 1
+#include <immintrin.h>
+#endif
+#include <vector>
+
+#include "constraints/volume_gather.hpp"
 
 namespace phymul {
 namespace {
@@ -19,7 +29,9 @@ Vec3 free_axes(const Vec3& inverse_mass) {
 // The scratch finalize sizes (model.cpp, mark_coupled_volumes).
 bool usable(const Model& model) {
   if (model.volumes.empty() || model.volumes.size() > size_t(kMax)) return false;
-  if (model.coupled_factor.size() != size_t(kMax * kMax)) return false;
+  if (model.coupled_factor.size() != size_t(kMax * kMax) ||
+      model.coupled_scatter.size() != 3 * model.inverse_mass.size() + 1)
+    return false;
   for (const VolumeConstraint& c : model.volumes)
     if (c.coupled_direction.size() != c.nodes.size() ||
         c.coupled_gradient.size() != c.nodes.size() || c.coupled_at.size() != c.nodes.size())
@@ -29,6 +41,7 @@ bool usable(const Model& model) {
 
 // 6 dV/dx of c at x into grad, zero on the nodes of every other surface (the products with
 // their directions read there); returns 6 V. The factor 6 is taken out once by the callers.
+// The triangles' scatter: for a constraint finalize did not index, and the pressures.
 double six_gradient(const Model& model, const VolumeConstraint& c, std::span<const Vec3> x,
                     std::span<Vec3> grad) {
   for (const VolumeConstraint& other : model.volumes)
@@ -45,33 +58,199 @@ double six_gradient(const Model& model, const VolumeConstraint& c, std::span<con
   return six_volume;
 }
 
+#ifdef PHYMUL_VOLUME_AVX2
+// Three doubles in the lanes 0-2 of a register, 0 in the fourth; never read or written past.
+[[gnu::always_inline]] inline __m256i three_lanes() { return _mm256_setr_epi64x(-1, -1, -1, 0); }
+[[gnu::always_inline]] inline __m256d load3(const Vec3& v) {
+  return _mm256_maskload_pd(v.data(), three_lanes());
+}
+[[gnu::always_inline]] inline void store3(Vec3& v, __m256d r) {
+  _mm256_maskstore_pd(v.data(), three_lanes(), r);
+}
+// (y, z, x, w): the cross product a x b is a * yzx(b) - yzx(a) * b in the lanes (z, x, y).
+[[gnu::always_inline]] inline __m256d yzx(__m256d v) {
+  return _mm256_permute4x64_pd(v, _MM_SHUFFLE(3, 0, 2, 1));
+}
+[[gnu::always_inline]] inline __m256d zxy(__m256d v) {
+  return _mm256_permute4x64_pd(v, _MM_SHUFFLE(3, 1, 0, 2));
+}
+[[gnu::always_inline]] inline double lane_sum(__m256d v) {
+  alignas(32) double l[4];
+  _mm256_store_pd(l, v);
+  return (l[0] + l[1]) + (l[2] + l[3]);
+}
+
+// 6 dV/dx of c summed at its nodes in the scratch, in the rotated lanes (z, x, y); returns
+// 6 V. A triangle's three cross products take one register each: about half the
+// instructions of the scalar scatter, no spills. The scratch has the positions' layout (one
+// index for both); a node's sum is read and written in four lanes, the fourth being the next
+// node's first: the cross products' fourth lane is 0, the sums are taken in turn, and that
+// lane is never read as a result.
+double rotated_six_gradient(const Model& model, const VolumeConstraint& c,
+                            std::span<const Vec3> x) {
+  double* __restrict sum = model.coupled_scatter.data();
+  const double* __restrict p = x.data()->data();
+  for (int i : c.nodes) _mm256_storeu_pd(sum + 3 * size_t(i), _mm256_setzero_pd());
+  __m256d volume = _mm256_setzero_pd();
+  const __m256i three = three_lanes();
+  for (const Triangle& t : c.triangles) {
+    const size_t i0 = 3 * size_t(t[0]), i1 = 3 * size_t(t[1]), i2 = 3 * size_t(t[2]);
+    const __m256d a = _mm256_maskload_pd(p + i0, three), b = _mm256_maskload_pd(p + i1, three),
+                  d = _mm256_maskload_pd(p + i2, three);
+    const __m256d ar = yzx(a), br = yzx(b), dr = yzx(d);
+    const __m256d bd = _mm256_fmsub_pd(b, dr, _mm256_mul_pd(br, d));
+    const __m256d da = _mm256_fmsub_pd(d, ar, _mm256_mul_pd(dr, a));
+    const __m256d ab = _mm256_fmsub_pd(a, br, _mm256_mul_pd(ar, b));
+    double* s0 = sum + i0;
+    double* s1 = sum + i1;
+    double* s2 = sum + i2;
+    _mm256_storeu_pd(s0, _mm256_add_pd(_mm256_loadu_pd(s0), bd));
+    _mm256_storeu_pd(s1, _mm256_add_pd(_mm256_loadu_pd(s1), da));
+    _mm256_storeu_pd(s2, _mm256_add_pd(_mm256_loadu_pd(s2), ab));
+    volume = _mm256_fmadd_pd(zxy(a), bd, volume);  // a . (b x d), lane by lane
+  }
+  return lane_sum(volume);
+}
+
+// The per-node part of gradient_and_direction from the rotated sums, four lanes at once.
+double directions_from_rotated(const Model& model, const VolumeConstraint& c,
+                               std::span<const Vec3> x, std::span<Vec3> grad, bool keep) {
+  const double* __restrict sum = model.coupled_scatter.data();
+  const int* __restrict nodes = c.nodes.data();
+  const Vec3* __restrict w = model.inverse_mass.data();
+  Vec3* __restrict g = grad.data();
+  Vec3* __restrict direction = c.coupled_direction.data();
+  Vec3* __restrict kept = c.coupled_gradient.data();
+  Vec3* __restrict at = c.coupled_at.data();
+  const __m256d sixth = _mm256_set1_pd(1.0 / 6.0);
+  __m256d product = _mm256_setzero_pd();
+  const int n = int(c.nodes.size());
+  for (int m = 0; m < n; ++m) {
+    const int i = nodes[m];
+    // The fourth lane is the next node's: zero it.
+    const __m256d six =
+        _mm256_blend_pd(yzx(_mm256_loadu_pd(sum + 3 * size_t(i))), _mm256_setzero_pd(), 0b1000);
+    const __m256d d = _mm256_mul_pd(sixth, _mm256_mul_pd(six, load3(w[i])));
+    store3(g[i], six);
+    store3(direction[m], d);
+    product = _mm256_fmadd_pd(six, d, product);
+    if (keep) store3(kept[m], six), at[m] = x[size_t(i)];
+  }
+  return lane_sum(product);
+}
+#endif
+
+// The chord iterations' volumes: the same sum of a . (b x d) (lane by lane with AVX2).
 double volume(const VolumeConstraint& c, std::span<const Vec3> x) {
+#ifdef PHYMUL_VOLUME_AVX2
+  const Vec3* __restrict p = x.data();
+  __m256d six_volume = _mm256_setzero_pd();
+  for (const Triangle& t : c.triangles) {
+    const __m256d a = load3(p[t[0]]), b = load3(p[t[1]]), d = load3(p[t[2]]);
+    const __m256d bd = _mm256_fmsub_pd(b, yzx(d), _mm256_mul_pd(yzx(b), d));
+    six_volume = _mm256_fmadd_pd(zxy(a), bd, six_volume);
+  }
+  return lane_sum(six_volume) / 6.0;
+#else
   double six_volume = 0.0;
   for (const Triangle& t : c.triangles) six_volume += x[t[0]].dot(x[t[1]].cross(x[t[2]]));
   return six_volume / 6.0;
+#endif
+}
+
+// sum over c's nodes of local[m] . field[nodes[m]].
+double local_dot(const VolumeConstraint& c, const Vec3* __restrict local,
+                 const Vec3* __restrict field) {
+  const int* __restrict nodes = c.nodes.data();
+  const int n = int(c.nodes.size());
+#ifdef PHYMUL_VOLUME_AVX2
+  __m256d sum = _mm256_setzero_pd();
+  for (int m = 0; m < n; ++m) sum = _mm256_fmadd_pd(load3(local[m]), load3(field[nodes[m]]), sum);
+  return lane_sum(sum);
+#else
+  double sum = 0.0;
+  for (int m = 0; m < n; ++m) sum += local[m].dot(field[nodes[m]]);
+  return sum;
+#endif
+}
+
+// field[nodes[m]] -= s * local[m], each local[m] first scaled by w[nodes[m]] / 6 when w is
+// given (a kept gradient's direction).
+void subtract_along(const VolumeConstraint& c, double s, const Vec3* __restrict local,
+                    const Vec3* __restrict w, Vec3* __restrict field) {
+  const int* __restrict nodes = c.nodes.data();
+  const int n = int(c.nodes.size());
+#ifdef PHYMUL_VOLUME_AVX2
+  const __m256d factor = _mm256_set1_pd(s), sixth = _mm256_set1_pd(1.0 / 6.0);
+  for (int m = 0; m < n; ++m) {
+    Vec3& f = field[nodes[m]];
+    __m256d d = load3(local[m]);
+    if (w) d = _mm256_mul_pd(sixth, _mm256_mul_pd(d, load3(w[nodes[m]])));
+    store3(f, _mm256_fnmadd_pd(factor, d, load3(f)));
+  }
+#else
+  for (int m = 0; m < n; ++m) {
+    const Vec3 d = w ? Vec3((1.0 / 6.0) * local[m].cwiseProduct(w[nodes[m]])) : local[m];
+    field[nodes[m]] -= s * d;
+  }
+#endif
+}
+
+// At x, for c: 6 dV/dx at its own nodes into grad (node-indexed), its direction w dV/dx
+// into coupled_direction, and, with `keep`, the gradient and x into coupled_gradient,
+// coupled_at. Returns the sum of 6 dV/dx . d over its nodes; 6 V into six_volume.
+double gradient_and_direction(const Model& model, const VolumeConstraint& c,
+                              std::span<const Vec3> x, std::span<Vec3> grad, bool keep,
+                              double& six_volume) {
+#ifdef PHYMUL_VOLUME_AVX2
+  if (gathered(c)) {  // every corner is one of `nodes`: the scatter touches nothing else
+    six_volume = rotated_six_gradient(model, c, x);
+    return directions_from_rotated(model, c, x, grad, keep);
+  }
+#endif
+  six_volume = six_gradient(model, c, x, grad);
+  const int* __restrict nodes = c.nodes.data();
+  const Vec3* __restrict w = model.inverse_mass.data();
+  const Vec3* __restrict g = grad.data();
+  Vec3* __restrict direction = c.coupled_direction.data();
+  Vec3* __restrict kept = c.coupled_gradient.data();
+  Vec3* __restrict at = c.coupled_at.data();
+  double product = 0.0;
+  const int n = int(c.nodes.size());
+  for (int m = 0; m < n; ++m) {
+    const int i = nodes[m];
+    const Vec3 d = (1.0 / 6.0) * g[i].cwiseProduct(w[i]);
+    direction[m] = d;
+    product += g[i].dot(d);
+    if (keep) kept[m] = g[i], at[m] = x[size_t(i)];
+  }
+  return product;
 }
 
 // At x: every direction d_k = w dV_k/dx (into the constraint's coupled_direction), the
-// symmetric G W G^T (a_kl = dV_k/dx . d_l) and each volume V_k. One gradient pass per
-// surface; `keep`: each 6 dV_k/dx and x into the constraint's coupled_gradient, coupled_at.
+// symmetric G W G^T (a_kl = dV_k/dx . d_l, zero but on the nodes two surfaces share) and,
+// given `volumes`, each V_k. One gradient pass per surface; `keep`: each 6 dV_k/dx and x
+// into the constraint's coupled_gradient, coupled_at.
 void linearise(const Model& model, std::span<const Vec3> x, std::span<Vec3> grad, Square& a,
-               Column& volumes, bool keep) {
+               Column* volumes, bool keep) {
   constexpr double kSixth = 1.0 / 6.0;
   const int n = int(model.volumes.size());
   for (int k = 0; k < n; ++k) {
     const VolumeConstraint& c = model.volumes[size_t(k)];
-    volumes[size_t(k)] = six_gradient(model, c, x, grad) / 6.0;
-    for (size_t m = 0; m < c.nodes.size(); ++m) {
-      const int i = c.nodes[m];
-      c.coupled_direction[m] = kSixth * grad[i].cwiseProduct(model.inverse_mass[size_t(i)]);
-      if (keep) c.coupled_gradient[m] = grad[i], c.coupled_at[m] = x[size_t(i)];
-    }
-    for (int l = 0; l <= k; ++l) {  // grad is dV_k/dx (times 6) here, d_l is stored
-      const VolumeConstraint& o = model.volumes[size_t(l)];
-      double product = 0.0;
-      for (size_t m = 0; m < o.nodes.size(); ++m)
-        product += grad[o.nodes[m]].dot(o.coupled_direction[m]);
-      a[size_t(k * kMax + l)] = a[size_t(l * kMax + k)] = kSixth * product;
+    double six_volume = 0.0;
+    a[size_t(k * kMax + k)] = kSixth * gradient_and_direction(model, c, x, grad, keep, six_volume);
+    if (volumes) (*volumes)[size_t(k)] = six_volume / 6.0;
+    // grad is 6 dV_k/dx on c's nodes here, d_l is stored: the shared nodes, by l then node.
+    for (int l = 0; l < k; ++l) a[size_t(k * kMax + l)] = a[size_t(l * kMax + k)] = 0.0;
+    double product = 0.0;
+    for (size_t s = 0; s < c.shared.size(); ++s) {
+      const auto [l, here, there] = c.shared[s];
+      product += grad[c.nodes[size_t(here)]].dot(
+          model.volumes[size_t(l)].coupled_direction[size_t(there)]);
+      if (s + 1 == c.shared.size() || c.shared[s + 1][0] != l) {
+        a[size_t(k * kMax + l)] = a[size_t(l * kMax + k)] = kSixth * product;
+        product = 0.0;
+      }
     }
   }
 }
@@ -81,9 +260,25 @@ void linearise(const Model& model, std::span<const Vec3> x, std::span<Vec3> grad
 // positions of the last one's, whatever was computed in between: a monitor's residual).
 bool kept_linearisation_at(const Model& model, std::span<const Vec3> x) {
   if (!model.coupled_factor_valid) return false;
-  for (const VolumeConstraint& c : model.volumes)
-    for (size_t m = 0; m < c.nodes.size(); ++m)
-      if (c.coupled_at[m] != x[size_t(c.nodes[m])]) return false;
+  for (const VolumeConstraint& c : model.volumes) {
+    const int* __restrict nodes = c.nodes.data();
+    const Vec3* __restrict at = c.coupled_at.data();
+    const int n = int(c.nodes.size());
+#ifdef PHYMUL_VOLUME_AVX2
+    // Branch-free within blocks of 32 nodes: after a step's projection the first block
+    // already differs, between steps every node is compared.
+    for (int begin = 0; begin < n; begin += 32) {
+      __m256d differ = _mm256_setzero_pd();
+      for (int m = begin; m < std::min(n, begin + 32); ++m)
+        differ = _mm256_or_pd(differ,
+                              _mm256_cmp_pd(load3(at[m]), load3(x[size_t(nodes[m])]), _CMP_NEQ_UQ));
+      if (!_mm256_testz_pd(differ, differ)) return false;
+    }
+#else
+    for (int m = 0; m < n; ++m)
+      if (at[m] != x[size_t(nodes[m])]) return false;
+#endif
+  }
   return true;
 }
 
@@ -122,12 +317,31 @@ void solve(int n, const Square& l, Column& b) {
 void move_along_directions(const Model& model, const Column& coefficient, std::span<Vec3> field) {
   for (size_t k = 0; k < model.volumes.size(); ++k) {
     const VolumeConstraint& c = model.volumes[k];
-    for (size_t m = 0; m < c.nodes.size(); ++m)
-      field[size_t(c.nodes[m])] -= coefficient[k] * c.coupled_direction[m];
+    subtract_along(c, coefficient[k], c.coupled_direction.data(), nullptr, field.data());
   }
 }
 
 }  // namespace
+
+void index_shared_volume_nodes(Model& model) {
+  for (size_t k = 0; k < model.volumes.size(); ++k) {
+    VolumeConstraint& c = model.volumes[k];
+    c.shared.clear();
+    for (size_t l = 0; l < k; ++l) {  // both sorted: a merge
+      const std::vector<int>& o = model.volumes[l].nodes;
+      for (size_t p = 0, q = 0; p < c.nodes.size() && q < o.size();) {
+        if (c.nodes[p] < o[q]) {
+          ++p;
+        } else if (o[q] < c.nodes[p]) {
+          ++q;
+        } else {
+          c.shared.push_back({int(l), int(p), int(q)});
+          ++p, ++q;
+        }
+      }
+    }
+  }
+}
 
 bool project_coupled_volumes(const Model& model, std::span<Vec3> x, double load_time,
                              std::span<Vec3> grad) {
@@ -141,7 +355,7 @@ bool project_coupled_volumes(const Model& model, std::span<Vec3> x, double load_
   const int n = int(model.volumes.size());
   Square a{};
   Column volumes{}, targets{}, residual{};
-  linearise(model, x, grad, a, volumes, /*keep=*/false);
+  linearise(model, x, grad, a, &volumes, /*keep=*/false);
   auto worst_error = [&] {
     double worst = 0.0;
     for (int k = 0; k < n; ++k) {
@@ -176,8 +390,7 @@ bool project_coupled_volume_velocities(const Model& model, std::span<const Vec3>
     std::copy_n(model.coupled_factor.begin(), kMax * kMax, a.begin());
   } else {
     model.coupled_factor_valid = false;
-    Column volumes{};
-    linearise(model, x, grad, a, volumes, /*keep=*/true);
+    linearise(model, x, grad, a, nullptr, /*keep=*/true);
     if (!cholesky(n, a)) return false;
     std::copy(a.begin(), a.end(), model.coupled_factor.begin());
     model.coupled_factor_valid = true;
@@ -185,22 +398,15 @@ bool project_coupled_volume_velocities(const Model& model, std::span<const Vec3>
   Column rates{};  // dV_k/dt
   for (int k = 0; k < n; ++k) {
     const VolumeConstraint& c = model.volumes[size_t(k)];
-    double rate = 0.0;
-    for (size_t m = 0; m < c.nodes.size(); ++m)
-      rate += c.coupled_gradient[m].dot(v[size_t(c.nodes[m])]);
-    rates[size_t(k)] = kSixth * rate;
+    rates[size_t(k)] = kSixth * local_dot(c, c.coupled_gradient.data(), v.data());
   }
   solve(n, a, rates);
   // v -= sum_k mu_k w dV_k/dx from the kept gradients: the directions' scratch may have been
   // overwritten since (the position projection, a residual's pressures).
   for (int k = 0; k < n; ++k) {
     const VolumeConstraint& c = model.volumes[size_t(k)];
-    for (size_t m = 0; m < c.nodes.size(); ++m) {
-      const int i = c.nodes[m];
-      const Vec3 direction =
-          kSixth * c.coupled_gradient[m].cwiseProduct(model.inverse_mass[size_t(i)]);
-      v[size_t(i)] -= rates[size_t(k)] * direction;
-    }
+    subtract_along(c, rates[size_t(k)], c.coupled_gradient.data(), model.inverse_mass.data(),
+                   v.data());
   }
   return true;
 }

@@ -11,6 +11,9 @@ namespace phymul {
 // Most constraints the joint projection takes: its n x n system lives on the stack.
 inline constexpr int kMaxJointVolumes = 16;
 
+// Lists in each VolumeConstraint::shared the nodes it shares with the earlier ones (finalize).
+void index_shared_volume_nodes(Model& model);
+
 // Moves the nodes by x + sum_j lambda_j w dV_j/dx (the gradients at the start, as the single
 // surface's projection) with the lambdas that put every volume at its target at load_time,
 // to 1e-13 relative or round-off. Returns false, having moved nothing or moved towards the

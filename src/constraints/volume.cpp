@@ -9,6 +9,7 @@
 
 #include "constraints/constraints.hpp"
 #include "constraints/coupled_volume.hpp"
+#include "constraints/volume_gather.hpp"
 
 namespace phymul {
 namespace {
@@ -54,24 +55,6 @@ std::array<double, 4> volume_cubic(const VolumeConstraint& c, std::span<const Ve
   for (double& v : k) v /= 6.0;
   return k;
 }
-
-bool gathered(const VolumeConstraint& c) { return c.incident_start.size() == c.nodes.size() + 1; }
-
-// 6 dV/dx at c.nodes[k], summed over its triangles in the order the triangles' scatter adds
-// them (the same bits), so that each node is one thread's: parallel and independent of the
-// thread count. Plain pointers, which the stores into the gradient cannot move.
-struct FaceGather {
-  const int* __restrict start;
-  const std::array<int, 2>* __restrict pair;
-  const Vec3* __restrict x;
-  FaceGather(const VolumeConstraint& c, std::span<const Vec3> positions)
-      : start(c.incident_start.data()), pair(c.incident.data()), x(positions.data()) {}
-  [[gnu::always_inline]] Vec3 six_gradient_at(int k) const {
-    Vec3 g = Vec3::Zero();
-    for (int e = start[k]; e < start[k + 1]; ++e) g += x[pair[e][0]].cross(x[pair[e][1]]);
-    return g;
-  }
-};
 
 // The triangles' scatter, for a constraint finalize did not index.
 void scatter_volume_gradient(const VolumeConstraint& c, std::span<const Vec3> x,

@@ -239,15 +239,45 @@ void Simulator::accelerations(std::vector<Vec3>& a, std::span<Vec3> volume_scrat
   project_doubled(model_, a);
 }
 
+// Whether the nodes whose accelerations the constraints change are a good part of the
+// model (a volume's surface around few interior nodes, as the prostate study's).
+static bool mostly_constrained(const Model& model) {
+  size_t constrained = 0;
+  for (const VolumeConstraint& vc : model.volumes) constrained += vc.nodes.size();
+  for (int g = 0; g < model.doubled.rows(); ++g) constrained += model.doubled.row(g).size();
+  return 4 * constrained >= size_t(model.node_count());
+}
+
 // The first half kick and the drift, x += h (v + h/2 a), in one pass over the nodes. The
 // nodes whose accelerations the constraints change (volume surfaces, doubled groups) get
-// them projected first, and are moved again after the pass by the same expression. Rigid
-// bodies are kicked first: their nodes' accelerations are zero (no free axis).
+// them projected first, and are moved again after the pass by the same expression (or, where
+// they are most nodes, all accelerations are projected first). Rigid bodies are kicked first:
+// their nodes' accelerations are zero (no free axis).
 void Simulator::drift(double h) {
   State& s = state_;
   const int n = model_.node_count();
   const double c = model_.damping;
   kick_rigid_bodies(model_, s, h);
+  if (mostly_constrained(model_)) {  // every acceleration once, projected, one moving pass
+    {
+      Vec3* __restrict a = f_start_.data();
+      const Vec3 *__restrict v = s.v.data(), *__restrict f = s.f.data(),
+                 *__restrict w = model_.inverse_mass.data();
+#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
+      for (int i = 0; i < n; ++i) a[i] = acceleration(w[i], f[i], v[i], c);
+    }
+    if (!model_.volumes.empty()) project_volume_velocities(model_, s.x, f_start_, x_start_);
+    project_doubled(model_, f_start_);
+    Vec3* __restrict x = s.x.data(), * __restrict x0 = x_start_.data(), * __restrict v0 = v_start_.data();
+    const Vec3* __restrict v = s.v.data(), * __restrict a = f_start_.data();
+#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
+    for (int i = 0; i < n; ++i) {
+      x0[i] = x[i];
+      v0[i] = v[i];  // the last good state, if the step fails its checks
+      x[i] += h * (v[i] + 0.5 * h * a[i]);
+    }
+    return;
+  }
   auto constrained_accelerations = [&](std::span<const int> nodes) {
     const int m = int(nodes.size());
 #pragma omp parallel for schedule(static) if (m >= kParallelFrom)

@@ -61,6 +61,24 @@ TEST(CoupledVolumes, TwoChambersSharingAWallKeepBothVolumesEveryStep) {
   }
 }
 
+// The joint projection multiplies two surfaces' gradients only where both are non-zero: the
+// 5 x 5 nodes of the wall, each listed once with its place in both constraints.
+TEST(CoupledVolumes, TheSharedWallIsIndexedForTheProductsOfTwoGradients) {
+  const Model model = two_chambers();
+  const VolumeConstraint &left = model.volumes[0], &right = model.volumes[1];
+  EXPECT_TRUE(left.shared.empty());
+  ASSERT_EQ(right.shared.size(), 25u);
+  int previous = -1;
+  for (const auto& [l, here, there] : right.shared) {
+    EXPECT_EQ(l, 0);
+    const int node = right.nodes[size_t(here)];
+    EXPECT_EQ(left.nodes[size_t(there)], node);
+    EXPECT_EQ(model.rest_position[size_t(node)].x(), 0.0);
+    EXPECT_GT(node, previous);  // by node: the order of the sums over the nodes
+    previous = node;
+  }
+}
+
 TEST(CoupledVolumes, VelocitiesAreTangentToBothConstraints) {
   Simulator sim(two_chambers());
   const Model& m = sim.model();
