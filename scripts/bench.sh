@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # make bench: Google Benchmark of full steps and of static relaxation (bench/results.json),
-# the prostate study's scenes on one core (bench/results_prostate.json, with their real-time
-# factor), the Truth Cube table and the stiffness calibration on one core
-# (bench/results_validation.json) and the resident memory of the 40^3 step model in a fresh process (bench/memory.json).
+# the shape-memory pass alone (bench/results_kernel.json), the prostate study's scenes on
+# one core (bench/results_prostate.json, with their real-time factor), the Truth Cube table
+# and the stiffness calibration on one core (bench/results_validation.json) and the
+# resident memory of the 40^3 step model in a fresh process (bench/memory.json).
 set -euo pipefail
 build=${1:-build}
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -11,6 +12,9 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 "$root/$build/bench/phymul_interaction_bench" \
   --benchmark_out="$root/bench/results_interactions.json" --benchmark_out_format=json \
   --benchmark_counters_tabular=true
+# The shape-memory pass alone, 40^3 pushed cube.
+"$root/$build/bench/phymul_kernel_bench" --benchmark_out="$root/bench/results_kernel.json" \
+  --benchmark_out_format=json --benchmark_counters_tabular=true
 OMP_NUM_THREADS=1 "$root/$build/bench/phymul_validation_bench" \
   --benchmark_out="$root/bench/results_validation.json" --benchmark_out_format=json \
   --benchmark_counters_tabular=true
