@@ -7,20 +7,14 @@
 
 #include <algorithm>
 #include <chrono>
-#include <ctime>
 
 #include "cube.hpp"
 #include "forces/shape_memory.hpp"
+#include "thread_cpu_time.hpp"
 
 namespace {
 
 using namespace phymul;
-
-double thread_cpu_seconds() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
-}
 
 struct Snapshot {
   std::vector<Vec3> x;                       // at step s + 1

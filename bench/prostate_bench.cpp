@@ -5,22 +5,16 @@
 // (what the step costs when a busy machine shares the core).
 #include <benchmark/benchmark.h>
 #include <omp.h>
-#include <time.h>
 
 #include <chrono>
 
 #include "phymul/prostate.hpp"
 #include "phymul/simulator.hpp"
+#include "thread_cpu_time.hpp"
 
 namespace {
 
 using namespace phymul;
-
-double thread_cpu_seconds() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
-}
 
 void BM_ProstateStep(benchmark::State& state) {
   omp_set_num_threads(1);

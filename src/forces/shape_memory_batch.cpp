@@ -335,10 +335,6 @@ PHYMUL_LANES void add_pair_normal_reaction(int n, const LaneFit& fit, const Lane
     }
 }
 
-}  // namespace
-
-namespace {
-
 // One batch between its phases: the fit, the rotation's Newton turns, the forces.
 struct Batch {
   std::array<int, W> ks;
