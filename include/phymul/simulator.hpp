@@ -169,7 +169,8 @@ class Simulator {
   std::vector<Vec3> pair_impulse_;         // per contact pair, N s, this step
   std::shared_ptr<DeformableContactWorkspace> deformable_;  // null without contact pairs
   double size_scale_ = 1.0;                                 // m, diagonal of the rest bounding box
-  std::vector<double> shortest_edge_;  // m per node, for the runaway guard (runaway_guard.hpp)
+  std::vector<double> shortest_edge_;   // m per node, for the runaway guard (runaway_guard.hpp)
+  double shortest_edge_overall_ = 0.0;  // m, their smallest
   // Inertia of each node in the pseudo-dynamics: its mass, or in static mode a fictitious
   // mass that gives every node the same Gershgorin frequency (inertia_ empty: the masses).
   std::vector<double> inertia_;

@@ -343,6 +343,16 @@ void index_shared_volume_nodes(Model& model) {
   }
 }
 
+// The factor of G W G^T at the positions the constraints' coupled_at hold, for the velocity
+// projection that comes next at the same positions.
+bool keep_factor(const Model& model, int n, Square& a) {
+  model.coupled_factor_valid = false;
+  if (!cholesky(n, a)) return false;
+  std::copy(a.begin(), a.end(), model.coupled_factor.begin());
+  model.coupled_factor_valid = true;
+  return true;
+}
+
 bool project_coupled_volumes(const Model& model, std::span<Vec3> x, double load_time,
                              std::span<Vec3> grad) {
   // Chord iterations on V_k(x0 + sum_j lambda_j d_j) = target_k with the Jacobian at x0,
@@ -351,11 +361,15 @@ bool project_coupled_volumes(const Model& model, std::span<Vec3> x, double load_
   constexpr double kExact = 1e-13;      // relative; the sweeps stopped at 1e-12
   constexpr double kConverged = 1e-12;  // accepted where round-off stops the progress
   constexpr int kMaxIterations = 20;
+  // From an error this small, one chord step lands within round-off: its volumes are then
+  // taken with the gradients at the projected positions, which the velocity projection
+  // needs next (one gradient pass a step instead of two).
+  constexpr double kLastStep = 1e-7;
   if (!usable(model)) return false;
   const int n = int(model.volumes.size());
   Square a{};
   Column volumes{}, targets{}, residual{};
-  linearise(model, x, grad, a, &volumes, /*keep=*/false);
+  linearise(model, x, grad, a, &volumes, /*keep=*/true);
   auto worst_error = [&] {
     double worst = 0.0;
     for (int k = 0; k < n; ++k) {
@@ -366,13 +380,21 @@ bool project_coupled_volumes(const Model& model, std::span<Vec3> x, double load_
   };
   for (int k = 0; k < n; ++k) targets[size_t(k)] = model.volumes[size_t(k)].target_at(load_time);
   double worst = worst_error();
+  if (!keep_factor(model, n, a)) return worst <= kExact;
   if (worst <= kExact) return true;
-  if (!cholesky(n, a)) return false;
   for (int it = 0; it < kMaxIterations; ++it) {
     Column step = residual;
     solve(n, a, step);
     move_along_directions(model, step, x);
-    for (int k = 0; k < n; ++k) volumes[size_t(k)] = volume(model.volumes[size_t(k)], x);
+    const bool relinearised = worst <= kLastStep;
+    if (relinearised) {
+      // Should it not land yet, the next steps are Newton's, with this linearisation.
+      linearise(model, x, grad, a, &volumes, /*keep=*/true);
+      if (!keep_factor(model, n, a)) return false;
+    } else {
+      model.coupled_factor_valid = false;
+      for (int k = 0; k < n; ++k) volumes[size_t(k)] = volume(model.volumes[size_t(k)], x);
+    }
     const double before = worst;
     worst = worst_error();
     if (worst <= kExact || (worst <= kConverged && worst > 0.25 * before)) return true;

@@ -470,11 +470,14 @@ double add_batch_forces(const ShapeMemory& m, Batch& b, std::span<const Vec3> re
       for (int j = 0; j < n; ++j) store_rows(reaction_on(j), &reaction[0][j], rows);
     } else if (m.surface) {  // N = sum of e_j x e_j+1 around the ring: the centroid terms cancel
       const V3 hp = normal_gradient(b.normal, R, half_mu);
-      for (int j = 0; j < n; ++j) {  // (no modulo: an integer division each)
-        const int next = j + 1 == n ? 0 : j + 1, previous = j == 0 ? n - 1 : j - 1;
-        const V3 rj = reaction_on(j);
-        store_rows(rj + cross(b.dx[next] - b.dx[previous], hp), &reaction[0][j], rows);
-      }
+      auto ring_row = [&](int j, int previous, int next) {
+        store_rows(reaction_on(j) + cross(b.dx[next] - b.dx[previous], hp), &reaction[0][j], rows);
+      };
+      // The ring's ends apart: its wrap-around indices cost more than the rows (no modulo
+      // either: an integer division each).
+      ring_row(0, n - 1, 1 % n);
+      for (int j = 1; j + 1 < n; ++j) ring_row(j, j - 1, j + 1);
+      if (n > 1) ring_row(n - 1, n - 2, 0);
     } else {
       for (int j = 0; j < n; ++j) b.r[j] = reaction_on(j);
       add_pair_normal_reaction(n, fit, b.normal, normal_gradient(b.normal, R, half_mu), b.r);

@@ -79,6 +79,8 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
   }
   size_scale_ = bounding_diagonal(model_.rest_position);
   shortest_edge_ = runaway_edges(model_);
+  shortest_edge_overall_ = shortest_edge_.empty() ? std::numeric_limits<double>::infinity()
+                                                  : std::ranges::min(shortest_edge_);
   if (model_.settings.mode == SolveMode::static_equilibrium &&
       model_.settings.relaxation_mass_scaling)
     scale_masses_for_relaxation();
@@ -387,25 +389,27 @@ void Simulator::check_stability() const {
         i, s.time);
   };
   const int n = model_.node_count();
-  bool all_well = true;  // a parallel look first; the first bad node is then found in order
-  // Squared, without the square root: below (1 - 1e-9) of the squared bound a node passes
-  // the exact test too; the others take it.
+  // A parallel look first, without branches or square roots: a node passes when its squared
+  // distance from rest is below (1 - 1e-9) of the squared bound and its squared speed is
+  // finite (NaN fails both comparisons). The first bad node is then found in order by the
+  // exact test, which the others pass too.
   const double bound = 10.0 * size_scale_, surely = (1.0 - 1e-9) * bound * bound;
-  // In the same pass, the runaway guard's first look: the largest step and shortest edge.
+  constexpr double kInfinity = std::numeric_limits<double>::infinity();
+  // In the same pass, the runaway guard's first look: the largest step.
   const Vec3 *__restrict x = s.x.data(), *__restrict v = s.v.data(),
              *__restrict rest = model_.rest_position.data(), *__restrict x0 = x_start_.data();
-  const double* __restrict edge = shortest_edge_.data();
-  double largest_step2 = 0.0, shortest = std::numeric_limits<double>::infinity();
-#pragma omp parallel for schedule(static) if (n >= kParallelFrom) reduction(&& : all_well) \
-    reduction(max : largest_step2) reduction(min : shortest)
+  double largest_step2 = 0.0;
+  int doubtful = 0;
+  // clang-format off
+#pragma omp parallel for schedule(static) if (n >= kParallelFrom) \
+    reduction(| : doubtful) reduction(max : largest_step2)
+  // clang-format on
   for (int i = 0; i < n; ++i) {
     largest_step2 = std::max(largest_step2, (x[i] - x0[i]).squaredNorm());
-    shortest = std::min(shortest, edge[i]);
-    const Vec3 moved_by = x[i] - rest[i];
-    if (moved_by.squaredNorm() < surely && v[i].allFinite()) continue;
-    const double moved = moved_by.norm();
-    all_well = all_well && std::isfinite(moved) && v[i].allFinite() && moved <= bound;
+    doubtful |=
+        int(!((x[i] - rest[i]).squaredNorm() < surely)) | int(!(v[i].squaredNorm() < kInfinity));
   }
+  const bool all_well = doubtful == 0;
   for (int i = 0; i < n && !all_well; ++i) {
     const double moved = (s.x[i] - model_.rest_position[i]).norm();
     const bool finite = std::isfinite(moved) && s.v[i].allFinite();
@@ -415,7 +419,7 @@ void Simulator::check_stability() const {
                                 moved, size_scale_)
                   : std::string("has a non-finite position or velocity"));
   }
-  if (steps_surely_within_bound(largest_step2, shortest)) return;
+  if (steps_surely_within_bound(largest_step2, shortest_edge_overall_)) return;
   if (const auto r = find_runaway(model_, shortest_edge_, x_start_, s.x))
     throw unstable(r->node,
                    fmt::format("moved {:.3g} m against its neighbours in one step, more than "
