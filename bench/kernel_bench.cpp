@@ -10,6 +10,7 @@
 
 #include "cube.hpp"
 #include "forces/shape_memory.hpp"
+#include "forces/shape_memory_single.hpp"
 #include "thread_cpu_time.hpp"
 
 namespace {
@@ -31,7 +32,9 @@ Snapshot snapshot(Simulator& sim) {
   return snap;
 }
 
-void BM_ShapeMemoryPass(benchmark::State& state) {
+// pass: add_shape_memory_forces or its single-precision variant.
+template <class Pass>
+void time_pass(benchmark::State& state, Pass pass) {
   omp_set_num_threads(int(state.range(1)));
   Simulator sim(bench::pushed_cube(int(state.range(0))));
   const Snapshot snap = snapshot(sim);
@@ -46,7 +49,7 @@ void BM_ShapeMemoryPass(benchmark::State& state) {
     std::fill(f.begin(), f.end(), Vec3::Zero());
     const auto start = std::chrono::steady_clock::now();
     const double cpu_start = thread_cpu_seconds();
-    energy = add_shape_memory_forces(m, model.rest_position, snap.x, rotation, f);
+    energy = pass(m, model.rest_position, snap.x, rotation, f);
     cpu_seconds += thread_cpu_seconds() - cpu_start;
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
@@ -57,7 +60,19 @@ void BM_ShapeMemoryPass(benchmark::State& state) {
   // This thread's CPU time (one thread): the pass's cost when a busy machine shares the core.
   state.counters["cpu_ns_per_node"] = cpu_seconds * 1e9 / passes;
 }
+void BM_ShapeMemoryPass(benchmark::State& state) { time_pass(state, add_shape_memory_forces); }
+
+// The same pass with the polar batches in float lanes (forces/shape_memory_single.cpp).
+void BM_ShapeMemoryPassSingle(benchmark::State& state) {
+  time_pass(state, add_shape_memory_forces_single);
+}
+
 BENCHMARK(BM_ShapeMemoryPass)
+    ->Args({24, 1})
+    ->Args({40, 1})
+    ->Args({40, 2})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ShapeMemoryPassSingle)
     ->Args({24, 1})
     ->Args({40, 1})
     ->Args({40, 2})
