@@ -251,7 +251,11 @@ PHYMUL_LANES Q turn(const Q& q, const V3& half) {
 // The pull is a - x_i = mean(d) + R c with c = X_i - G0 = -mean(r): no absolute position.
 struct LaneFit {
   V3 mean_d, mean_r;
-  M3 A;  // sum (x_j - g)(X_j - G0)^T (+ the normal pair)
+  // (sum (x_j - g)(X_j - G0)^T + the normal pair) / sum |X_j - X_i|^2: the rotation and the
+  // reaction's solve do not depend on A's scale, and at O(1) the Hessian's determinant (A^3)
+  // neither underflows float on micrometre cells nor overflows it on large ones.
+  M3 A;
+  F scale;  // 1 / sum |X_j - X_i|^2, 1/m^2
   F count;
 };
 
@@ -365,9 +369,12 @@ void fit_batch(const ShapeMemory& m, const int* ks, int used, std::span<const Ve
   }
   LaneFit& fit = b.fit;
   M3 P{};
-  for (int j = 0; j < n; ++j)
+  F rest_square{};
+  for (int j = 0; j < n; ++j) {
     for (int a = 0; a < 3; ++a)
       for (int c = 0; c < 3; ++c) P.a[a][c] += b.dx[j].v[a] * b.r[j].v[c];
+    rest_square += dot(b.r[j], b.r[j]);
+  }
   fit.count = splat(float(n));
   const F inverse_count = splat(1.0f / float(n));
   const V3 sum_d{{sdx, sdy, sdz}};
@@ -377,6 +384,9 @@ void fit_batch(const ShapeMemory& m, const int* ks, int used, std::span<const Ve
     for (int c = 0; c < 3; ++c) fit.A.a[a][c] = P.a[a][c] - sum_d.v[a] * fit.mean_r.v[c];
   b.normal_pair = m.framed.find(ks[0]) >= 0;
   if (b.normal_pair) add_normal_pair(m, b.ks, n, b.dx, b.r, fit, b.normal);
+  fit.scale = 1.0f / rest_square;
+  for (int a = 0; a < 3; ++a)
+    for (int c = 0; c < 3; ++c) fit.A.a[a][c] *= fit.scale;
   b.q = load_rotations(rotations, b.ks);
   b.active = Mask{} == 0;
   b.failed = Mask{};
@@ -444,8 +454,9 @@ double add_batch_forces(const ShapeMemory& m, Batch& b, std::span<const Vec3> re
     // As the double kernel: neighbour j gets -(f_i / n + R (mu x (X_j - G0)) / 2),
     // mu = 2 H^-1 K (c x R^T pull), c = -mean(r).
     V3 half_mu;
-    ok &= solve_positive_definite(rotation_hessian(transpose_times(R, fit.A)),
-                                  cross(transpose_times(R, pull), fit.mean_r) * stiffness, half_mu);
+    ok &= solve_positive_definite(
+        rotation_hessian(transpose_times(R, fit.A)),
+        cross(transpose_times(R, pull), fit.mean_r) * (stiffness * fit.scale), half_mu);
     const V3 share = fi * (1.0f / fit.count);
     auto reaction_on = [&](int j) { return share + times(R, cross(half_mu, b.r[j] - fit.mean_r)); };
     if (!b.normal_pair) {
