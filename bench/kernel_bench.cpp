@@ -10,6 +10,7 @@
 
 #include "cube.hpp"
 #include "forces/shape_memory.hpp"
+#include "forces/shape_memory_single.hpp"
 #include "thread_cpu_time.hpp"
 
 namespace {
@@ -31,7 +32,9 @@ Snapshot snapshot(Simulator& sim) {
   return snap;
 }
 
-void BM_ShapeMemoryPass(benchmark::State& state) {
+// pass: add_shape_memory_forces or its single-precision variant.
+template <class Pass>
+void time_pass(benchmark::State& state, Pass pass) {
   omp_set_num_threads(int(state.range(1)));
   Simulator sim(bench::pushed_cube(int(state.range(0))));
   const Snapshot snap = snapshot(sim);
@@ -46,7 +49,7 @@ void BM_ShapeMemoryPass(benchmark::State& state) {
     std::fill(f.begin(), f.end(), Vec3::Zero());
     const auto start = std::chrono::steady_clock::now();
     const double cpu_start = thread_cpu_seconds();
-    energy = add_shape_memory_forces(m, model.rest_position, snap.x, rotation, f);
+    energy = pass(m, model.rest_position, snap.x, rotation, f);
     cpu_seconds += thread_cpu_seconds() - cpu_start;
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
@@ -57,10 +60,64 @@ void BM_ShapeMemoryPass(benchmark::State& state) {
   // This thread's CPU time (one thread): the pass's cost when a busy machine shares the core.
   state.counters["cpu_ns_per_node"] = cpu_seconds * 1e9 / passes;
 }
+void BM_ShapeMemoryPass(benchmark::State& state) { time_pass(state, add_shape_memory_forces); }
+
+// The same pass with the polar batches in float lanes (forces/shape_memory_single.cpp).
+void BM_ShapeMemoryPassSingle(benchmark::State& state) {
+  time_pass(state, add_shape_memory_forces_single);
+}
+
+// Both passes alternately on the same snapshot, each iteration one of each: on a shared,
+// loaded machine the best and the median of each, taken side by side, compare them where two
+// separate benchmarks would each meet different load.
+void BM_ShapeMemoryPassDoubleVsSingle(benchmark::State& state) {
+  omp_set_num_threads(int(state.range(1)));
+  Simulator sim(bench::pushed_cube(int(state.range(0))));
+  const Snapshot snap = snapshot(sim);
+  const Model& model = sim.model();
+  const ShapeMemory& m = model.shape_memory[0];
+  std::vector<Eigen::Quaterniond> rotation = snap.rotation;
+  std::vector<Vec3> f(snap.x.size());
+  std::vector<double> ns[2];  // per node: double, single
+  double energy = 0.0;
+  for (auto _ : state)
+    for (int precision = 0; precision < 2; ++precision) {
+      std::copy(snap.rotation.begin(), snap.rotation.end(), rotation.begin());
+      std::fill(f.begin(), f.end(), Vec3::Zero());
+      const auto start = std::chrono::steady_clock::now();
+      energy += precision == 0
+                    ? add_shape_memory_forces(m, model.rest_position, snap.x, rotation, f)
+                    : add_shape_memory_forces_single(m, model.rest_position, snap.x, rotation, f);
+      ns[precision].push_back(
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() * 1e9 /
+          double(m.nodes.size()));
+    }
+  benchmark::DoNotOptimize(energy);
+  for (std::vector<double>& t : ns) std::sort(t.begin(), t.end());
+  const size_t median = ns[0].size() / 2;
+  state.counters["double_best_ns_per_node"] = ns[0][0];
+  state.counters["single_best_ns_per_node"] = ns[1][0];
+  state.counters["double_median_ns_per_node"] = ns[0][median];
+  state.counters["single_median_ns_per_node"] = ns[1][median];
+  state.counters["speedup_best"] = ns[0][0] / ns[1][0];
+  state.counters["speedup_median"] = ns[0][median] / ns[1][median];
+}
+
 BENCHMARK(BM_ShapeMemoryPass)
     ->Args({24, 1})
     ->Args({40, 1})
     ->Args({40, 2})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ShapeMemoryPassSingle)
+    ->Args({24, 1})
+    ->Args({40, 1})
+    ->Args({40, 2})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ShapeMemoryPassDoubleVsSingle)
+    ->Args({24, 1})
+    ->Args({40, 1})
+    ->Args({40, 2})
+    ->Iterations(200)
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace
