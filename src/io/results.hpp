@@ -15,7 +15,8 @@ namespace phymul {
 
 class ResultWriter {
  public:
-  ResultWriter(std::filesystem::path dir, std::string stem, const Model& model, bool vtk);
+  ResultWriter(std::filesystem::path dir, std::string stem, const Model& model, bool vtk,
+               VtuEncoding encoding = VtuEncoding::ascii);
   // One .vtu, and the .pvd rewritten to list it; with obstacles, their surfaces at that
   // instant too, in <stem>_obstacles_<frame>.vtu listed by <stem>_obstacles.pvd.
   void frame(Simulator& sim);
@@ -33,6 +34,7 @@ class ResultWriter {
   std::filesystem::path dir_;
   std::string stem_;
   bool vtk_;
+  VtuEncoding encoding_;
   bool has_obstacles_;
   std::vector<int> closed_components_;
   std::vector<PvdEntry> pvd_;
