@@ -81,8 +81,28 @@ void ResultWriter::frame(Simulator& sim) {
   write_vtu(dir_ / name, s.x, m.cells, points, cells, encoding_);
   write_obstacles(sim, int(pvd_.size()));
   pvd_.push_back({s.time, name});
+  series_stale_ = true;
+  const auto now = std::chrono::steady_clock::now();
+  const bool never = series_written_ == std::chrono::steady_clock::time_point{};
+  if (never || now - series_written_ >= kSeriesInterval) {
+    write_series();
+    series_written_ = now;
+  }
+}
+
+void ResultWriter::write_series() {
   write_pvd(dir_ / (stem_ + ".pvd"), pvd_);
   write_obstacle_pvd();
+  series_stale_ = false;
+}
+
+// A run that ends by an exception still leaves its series listing every frame written.
+ResultWriter::~ResultWriter() {
+  if (!series_stale_) return;
+  try {
+    write_series();
+  } catch (const std::exception&) {  // a second failure must not end the program
+  }
 }
 
 namespace {
@@ -150,6 +170,7 @@ void ResultWriter::restore(std::vector<PvdEntry> frames, const std::string& moni
 }
 
 void ResultWriter::finish(const RunReport& report) {
+  if (series_stale_) write_series();
   monitors_.close();
   if (!monitors_) throw std::runtime_error("cannot finish monitors.csv in " + dir_.string());
   std::filesystem::rename(dir_ / "monitors.csv.tmp", dir_ / "monitors.csv");
