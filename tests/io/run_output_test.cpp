@@ -150,6 +150,29 @@ TEST(RunOutput, BinaryFramesHoldTheAsciiFramesBits) {
   EXPECT_LT(binary_bytes, ascii_bytes);
 }
 
+// `phymul run --format` decides over the scene's output.format, both ways.
+TEST(RunOutput, FormatFlagOverridesTheScene) {
+  testing::TempDir dir;
+  std::ofstream(dir.path() / "jelly.yaml") << kScene << "  format: binary\n";
+  const auto scene = (dir.path() / "jelly.yaml").string();
+  for (const char* format : {"ascii", "binary"}) {
+    const auto out = dir.path() / format;
+    const auto run = run_command(testing::cli() + " run -q " + scene + " --format " + format +
+                                 " -o " + out.string());
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    const std::string frame = testing::read_text(out / "jelly_000002.vtu");
+    const bool raw = frame.find("<AppendedData encoding=\"raw\">") != std::string::npos;
+    const bool text = frame.find("format=\"ascii\"") != std::string::npos;
+    EXPECT_EQ(raw, std::string(format) == "binary") << format;
+    EXPECT_EQ(text, std::string(format) == "ascii") << format;
+  }
+  const auto bad = run_command(testing::cli() + " run -q " + scene + " --format xml -o " +
+                               (dir.path() / "xml").string());
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("--format"), std::string::npos) << bad.output;
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "xml"));
+}
+
 TEST(RunOutput, UnknownFormatIsRejectedNamingTheChoices) {
   testing::TempDir dir;
   const auto scene = dir.path() / "jelly.yaml";
