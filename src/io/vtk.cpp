@@ -11,6 +11,7 @@
 #include <ostream>
 #include <stdexcept>
 #include <system_error>
+#include <tuple>
 
 #include "io/vtk_appended.hpp"
 
@@ -273,6 +274,9 @@ void write_vtu(const std::filesystem::path& path, std::span<const Vec3> points,
   // Validate before opening anything so that bad input leaves no file behind.
   validate_vtu_input(points, cells, point_fields, cell_fields);
   CellArrays arrays;
+  arrays.connectivity.reserve(cells.size() * std::tuple_size_v<decltype(Cell::nodes)>);
+  arrays.offsets.reserve(cells.size());
+  arrays.types.reserve(cells.size());
   for (const Cell& cell : cells) {
     for (const int node : cell.node_span()) arrays.connectivity.push_back(node);
     arrays.offsets.push_back(static_cast<long long>(arrays.connectivity.size()));
