@@ -3,7 +3,8 @@
 # the shape-memory pass alone (bench/results_kernel.json), the prostate study's scenes on
 # one core (bench/results_prostate.json, with their real-time factor), the Truth Cube table
 # and the stiffness calibration on one core (bench/results_validation.json) and the
-# resident memory of the 40^3 step model in a fresh process (bench/memory.json).
+# resident memory of the 40^3 step model in a fresh process (bench/memory.json), and one frame
+# of a run's output as text and binary (bench/results_frame.json).
 set -euo pipefail
 build=${1:-build}
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -21,4 +22,8 @@ OMP_NUM_THREADS=1 "$root/$build/bench/phymul_validation_bench" \
 OMP_NUM_THREADS=1 "$root/$build/bench/phymul_prostate_bench" \
   --benchmark_out="$root/bench/results_prostate.json" --benchmark_out_format=json \
   --benchmark_counters_tabular=true
+# One frame of a run's output, text and binary (bench/results_frame.json).
+OMP_NUM_THREADS=1 "$root/$build/bench/phymul_frame_bench" \
+  --benchmark_out="$root/bench/results_frame.json" --benchmark_out_format=json \
+  --benchmark_counters_tabular=true --benchmark_repetitions=5 --benchmark_enable_random_interleaving=true
 "$root/$build/bench/phymul_memory" 40 | tee "$root/bench/memory.json"

@@ -65,6 +65,7 @@ int check(const std::string& file) {
 
 struct RunArguments {
   std::string scene, out = "out", checkpoint_every, resume;
+  std::string format;  // empty: the scene's output.format
   bool quiet = false;
   int threads = 0;      // 0: OpenMP's default (OMP_NUM_THREADS, else every core)
   long stop_after = 0;  // hidden, for tests
@@ -87,7 +88,10 @@ int run(RunArguments a) {
     const std::string& file = a.scene;
     const std::string& out = a.out;
     const bool quiet = a.quiet;
-    const phymul::Scene scene = phymul::load_scene(file);
+    phymul::Scene scene = phymul::load_scene(file);
+    if (!a.format.empty())
+      scene.output.format =
+          a.format == "binary" ? phymul::VtuEncoding::binary : phymul::VtuEncoding::ascii;
     phymul::install_interrupt_handlers();
     const phymul::RunReport r = phymul::run_scene(scene, options);
     if (!quiet && r.newton)
@@ -136,6 +140,11 @@ int main(int argc, char** argv) {
   auto* output =
       run_cmd->add_option("-o,--output", run_args.out, "output directory")->capture_default_str();
   run_cmd->add_flag("-q,--quiet", run_args.quiet, "no progress and no summary");
+  run_cmd
+      ->add_option("--format", run_args.format,
+                   "how the .vtu frames hold their numbers, instead of the scene's "
+                   "output.format: ascii (text) or binary (raw appended data, same bits)")
+      ->check(CLI::IsMember({"ascii", "binary"}));
   run_cmd
       ->add_option("--threads", run_args.threads,
                    "threads (default: OMP_NUM_THREADS, else every core); results are the same "

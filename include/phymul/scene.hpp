@@ -11,6 +11,7 @@
 
 #include "phymul/mesh.hpp"
 #include "phymul/schedule.hpp"
+#include "phymul/vtk.hpp"
 
 namespace phymul {
 
@@ -221,6 +222,7 @@ struct ContactSpec {
 struct OutputSpec {
   double interval = 0.0;  // s between frames (dynamic); 0 = first and last frame only
   bool vtk = true;
+  VtuEncoding format = VtuEncoding::ascii;
   SourceLoc loc;
 };
 

@@ -124,12 +124,12 @@ Mesh obstacle_surfaces(std::span<const RigidObstacle> obstacles, double load_tim
 
 void write_obstacle_surfaces(const std::filesystem::path& path,
                              std::span<const RigidObstacle> obstacles, double load_time,
-                             std::span<const Vec3> x) {
+                             std::span<const Vec3> x, VtuEncoding encoding) {
   const auto [lo, hi] = bounding_box(x);
   std::vector<int> owner;
   const Mesh surfaces = obstacle_surfaces(obstacles, load_time, lo, hi, owner);
   const CellField cells[] = {{"obstacle", owner}};
-  write_vtu(path, surfaces.points, surfaces.cells, {}, cells);
+  write_vtu(path, surfaces.points, surfaces.cells, {}, cells, encoding);
 }
 
 }  // namespace phymul

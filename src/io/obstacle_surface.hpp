@@ -8,6 +8,7 @@
 
 #include "phymul/mesh.hpp"
 #include "phymul/model.hpp"
+#include "phymul/vtk.hpp"
 
 namespace phymul {
 
@@ -23,6 +24,6 @@ Mesh obstacle_surfaces(std::span<const RigidObstacle> obstacles, double load_tim
 // `obstacle`) at `path`, written atomically: the frame that goes beside the body's.
 void write_obstacle_surfaces(const std::filesystem::path& path,
                              std::span<const RigidObstacle> obstacles, double load_time,
-                             std::span<const Vec3> x);
+                             std::span<const Vec3> x, VtuEncoding encoding = VtuEncoding::ascii);
 
 }  // namespace phymul

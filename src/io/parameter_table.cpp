@@ -933,6 +933,15 @@ std::vector<Parameter> output_parameters() {
        .kind = Kind::boolean,
        .default_value = "true",
        .doc = "Write VTK files."},
+      {.section = "output",
+       .name = "format",
+       .kind = Kind::choice,
+       .choices = {"ascii", "binary"},
+       .default_value = "ascii",
+       .doc = "How the .vtu frames hold their numbers. `ascii`: text, every double in its "
+              "shortest form that reads back to the same bits (well-formed XML, diffable). "
+              "`binary`: VTK XML appended raw data, the same bits written several times faster "
+              "(README, Output); ParaView, VTK and meshio read it, plain XML parsers do not."},
   };
 }
 

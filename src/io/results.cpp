@@ -30,10 +30,11 @@ std::string json_string(const std::string& s) {
 }  // namespace
 
 ResultWriter::ResultWriter(std::filesystem::path dir, std::string stem, const Model& model,
-                           bool vtk)
+                           bool vtk, VtuEncoding encoding)
     : dir_(std::move(dir)),
       stem_(std::move(stem)),
       vtk_(vtk),
+      encoding_(encoding),
       has_obstacles_(!model.obstacles.empty()) {
   for (int c = 0; c < int(model.components.size()); ++c)
     if (!model.components[c].boundary.empty()) closed_components_.push_back(c);
@@ -77,11 +78,31 @@ void ResultWriter::frame(Simulator& sim) {
       {"displacement", 3, displacement_}, {"velocity", 3, velocity_}, {"force", 3, force_}};
   const CellField cells[] = {{"component", m.cell_component}};
   const std::string name = fmt::format("{}_{:06d}.vtu", stem_, pvd_.size());
-  write_vtu(dir_ / name, s.x, m.cells, points, cells);
+  write_vtu(dir_ / name, s.x, m.cells, points, cells, encoding_);
   write_obstacles(sim, int(pvd_.size()));
   pvd_.push_back({s.time, name});
+  series_stale_ = true;
+  const auto now = std::chrono::steady_clock::now();
+  const bool never = series_written_ == std::chrono::steady_clock::time_point{};
+  if (never || now - series_written_ >= kSeriesInterval) {
+    write_series();
+    series_written_ = now;
+  }
+}
+
+void ResultWriter::write_series() {
   write_pvd(dir_ / (stem_ + ".pvd"), pvd_);
   write_obstacle_pvd();
+  series_stale_ = false;
+}
+
+// A run that ends by an exception still leaves its series listing every frame written.
+ResultWriter::~ResultWriter() {
+  if (!series_stale_) return;
+  try {
+    write_series();
+  } catch (const std::exception&) {  // a second failure must not end the program
+  }
 }
 
 namespace {
@@ -95,7 +116,7 @@ std::string obstacle_frame_name(const std::string& stem, size_t frame) {
 void ResultWriter::write_obstacles(Simulator& sim, int frame) {
   if (!has_obstacles_) return;
   write_obstacle_surfaces(dir_ / obstacle_frame_name(stem_, size_t(frame)), sim.model().obstacles,
-                          sim.load_time(), sim.state().x);
+                          sim.load_time(), sim.state().x, encoding_);
 }
 
 // The obstacles' frames are named after the body's, at the same times, so their list
@@ -149,6 +170,7 @@ void ResultWriter::restore(std::vector<PvdEntry> frames, const std::string& moni
 }
 
 void ResultWriter::finish(const RunReport& report) {
+  if (series_stale_) write_series();
   monitors_.close();
   if (!monitors_) throw std::runtime_error("cannot finish monitors.csv in " + dir_.string());
   std::filesystem::rename(dir_ / "monitors.csv.tmp", dir_ / "monitors.csv");

@@ -1,6 +1,7 @@
 // The files of a run: frames (.vtu and the .pvd listing them), monitors.csv, report.json.
 #pragma once
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -15,10 +16,16 @@ namespace phymul {
 
 class ResultWriter {
  public:
-  ResultWriter(std::filesystem::path dir, std::string stem, const Model& model, bool vtk);
-  // One .vtu, and the .pvd rewritten to list it; with obstacles, their surfaces at that
-  // instant too, in <stem>_obstacles_<frame>.vtu listed by <stem>_obstacles.pvd.
+  ResultWriter(std::filesystem::path dir, std::string stem, const Model& model, bool vtk,
+               VtuEncoding encoding = VtuEncoding::ascii);
+  // One .vtu, listed by the .pvd; with obstacles, their surfaces at that instant too, in
+  // <stem>_obstacles_<frame>.vtu listed by <stem>_obstacles.pvd. Each .pvd rewrite creates a
+  // file (half a millisecond on the study's machine, more than a binary frame's numbers), so
+  // while running they are rewritten for the first frame and then at most every
+  // kSeriesInterval of wall-clock time; finish() (or the destructor, on an error) lists all.
   void frame(Simulator& sim);
+  static constexpr std::chrono::milliseconds kSeriesInterval{500};
+  ~ResultWriter();
   void monitor(Simulator& sim);          // one row of monitors.csv
   void finish(const RunReport& report);  // monitors.csv complete, report.json
   int frames() const { return int(pvd_.size()); }
@@ -33,6 +40,7 @@ class ResultWriter {
   std::filesystem::path dir_;
   std::string stem_;
   bool vtk_;
+  VtuEncoding encoding_;
   bool has_obstacles_;
   std::vector<int> closed_components_;
   std::vector<PvdEntry> pvd_;
@@ -42,7 +50,10 @@ class ResultWriter {
   void write_monitors(const std::string& text);
   void write_obstacles(Simulator& sim, int frame);
   void write_obstacle_pvd();
-  std::vector<double> displacement_, velocity_, force_;  // flat xyz buffers for the writer
+  void write_series();         // both .pvd
+  bool series_stale_ = false;  // frames written since the .pvd last were
+  std::chrono::steady_clock::time_point series_written_{};  // {}: not yet by this writer
+  std::vector<double> displacement_, velocity_, force_;     // flat xyz buffers for the writer
 };
 
 // report.json's text (JSON; non-finite numbers become null).

@@ -518,6 +518,8 @@ OutputSpec SceneBuilder::output(SectionReader& reader) {
   spec.loc = reader.loc();
   reader.read("interval", spec.interval);
   reader.read("vtk", spec.vtk);
+  reader.read("format", spec.format,
+              {{"ascii", VtuEncoding::ascii}, {"binary", VtuEncoding::binary}});
   reader.done();
   return spec;
 }

@@ -5,11 +5,15 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <ostream>
 #include <stdexcept>
 #include <system_error>
+#include <tuple>
+
+#include "io/vtk_appended.hpp"
 
 namespace phymul {
 
@@ -176,16 +180,17 @@ namespace {
 struct CellArrays {
   std::vector<int> connectivity;
   std::vector<long long> offsets;  // Int64: the running sum outgrows Int32 before node ids do
-  std::vector<int> types;
+  std::vector<std::uint8_t> types;
 };
 
+template <class Integer>
 void write_integer_array(std::ostream& os, std::string_view type, std::string_view name,
-                         std::span<const long long> values) {
+                         std::span<const Integer> values) {
   os << fmt::format("        <DataArray type=\"{}\" Name=\"{}\" format=\"ascii\">\n", type,
                     xml_escape(name));
   std::string text;
   text.reserve(values.size() * 18);
-  for (const long long value : values) {
+  for (const Integer value : values) {
     text += "          ";
     append_integer(text, value);
     text += '\n';
@@ -193,41 +198,71 @@ void write_integer_array(std::ostream& os, std::string_view type, std::string_vi
   os << text << "        </DataArray>\n";
 }
 
-std::vector<long long> widen(std::span<const int> values) {
-  return std::vector<long long>(values.begin(), values.end());
+// The arrays of one file, as text in place or as raw bytes appended after the XML.
+class ArrayWriter {
+ public:
+  ArrayWriter(std::ostream& os, VtuEncoding encoding) : os_(os), encoding_(encoding) {}
+  void doubles(std::string_view name, int components, std::span<const double> values) {
+    if (encoding_ == VtuEncoding::ascii)
+      write_double_array(os_, name, components, values);
+    else
+      appended_.add(os_, "Float64", xml_escape(name), components, values);
+  }
+  template <class Integer>
+  void integers(std::string_view type, std::string_view name, std::span<const Integer> values) {
+    if (encoding_ == VtuEncoding::ascii)
+      write_integer_array(os_, type, name, values);
+    else
+      appended_.add(os_, type, xml_escape(name), 0, values);
+  }
+  void finish() {
+    if (encoding_ == VtuEncoding::binary) appended_.write(os_);
+  }
+
+ private:
+  std::ostream& os_;
+  VtuEncoding encoding_;
+  AppendedData appended_;
+};
+
+// Vec3 is three packed doubles, so the points are their coordinates in a row.
+static_assert(sizeof(Vec3) == 3 * sizeof(double));
+std::span<const double> coordinates(std::span<const Vec3> points) {
+  return {reinterpret_cast<const double*>(points.data()), points.size() * 3};
 }
 
 void write_grid(const std::filesystem::path& path, std::span<const Vec3> points,
                 const CellArrays& cells, std::span<const PointField> point_fields,
-                std::span<const CellField> cell_fields) {
+                std::span<const CellField> cell_fields, VtuEncoding encoding) {
   write_file_atomically(path, [&](std::ostream& os) {
-    os << "<?xml version=\"1.0\"?>\n"
-          "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-          "  <UnstructuredGrid>\n";
+    os << (encoding == VtuEncoding::ascii
+               ? "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" "
+                 "byte_order=\"LittleEndian\">\n"
+               : "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
+                 "byte_order=\"LittleEndian\" header_type=\"UInt64\">\n");
+    os << "  <UnstructuredGrid>\n";
     os << fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", points.size(),
                       cells.types.size());
+    ArrayWriter arrays(os, encoding);
     os << "      <PointData>\n";
     for (const PointField& field : point_fields)
-      write_double_array(os, field.name, field.components, field.values);
+      arrays.doubles(field.name, field.components, field.values);
     os << "      </PointData>\n";
     os << "      <CellData>\n";
-    for (const CellField& field : cell_fields)
-      write_integer_array(os, "Int32", field.name, widen(field.values));
+    for (const CellField& field : cell_fields) arrays.integers("Int32", field.name, field.values);
     os << "      </CellData>\n";
     os << "      <Points>\n";
-    std::vector<double> coordinates;
-    coordinates.reserve(points.size() * 3);
-    for (const Vec3& p : points) coordinates.insert(coordinates.end(), {p.x(), p.y(), p.z()});
-    write_double_array(os, "Points", 3, coordinates);
+    arrays.doubles("Points", 3, coordinates(points));
     os << "      </Points>\n";
     os << "      <Cells>\n";
-    write_integer_array(os, "Int32", "connectivity", widen(cells.connectivity));
-    write_integer_array(os, "Int64", "offsets", cells.offsets);
-    write_integer_array(os, "UInt8", "types", widen(cells.types));
+    arrays.integers("Int32", "connectivity", std::span<const int>(cells.connectivity));
+    arrays.integers("Int64", "offsets", std::span<const long long>(cells.offsets));
+    arrays.integers("UInt8", "types", std::span<const std::uint8_t>(cells.types));
     os << "      </Cells>\n";
     os << "    </Piece>\n"
-          "  </UnstructuredGrid>\n"
-          "</VTKFile>\n";
+          "  </UnstructuredGrid>\n";
+    arrays.finish();
+    os << "</VTKFile>\n";
   });
 }
 
@@ -235,29 +270,32 @@ void write_grid(const std::filesystem::path& path, std::span<const Vec3> points,
 
 void write_vtu(const std::filesystem::path& path, std::span<const Vec3> points,
                std::span<const Cell> cells, std::span<const PointField> point_fields,
-               std::span<const CellField> cell_fields) {
+               std::span<const CellField> cell_fields, VtuEncoding encoding) {
   // Validate before opening anything so that bad input leaves no file behind.
   validate_vtu_input(points, cells, point_fields, cell_fields);
   CellArrays arrays;
+  arrays.connectivity.reserve(cells.size() * std::tuple_size_v<decltype(Cell::nodes)>);
+  arrays.offsets.reserve(cells.size());
+  arrays.types.reserve(cells.size());
   for (const Cell& cell : cells) {
     for (const int node : cell.node_span()) arrays.connectivity.push_back(node);
     arrays.offsets.push_back(static_cast<long long>(arrays.connectivity.size()));
-    arrays.types.push_back(vtk_cell_type(cell.type));
+    arrays.types.push_back(std::uint8_t(vtk_cell_type(cell.type)));
   }
-  write_grid(path, points, arrays, point_fields, cell_fields);
+  write_grid(path, points, arrays, point_fields, cell_fields, encoding);
 }
 
 void write_points_vtu(const std::filesystem::path& path, std::span<const Vec3> points,
-                      std::span<const PointField> point_fields) {
+                      std::span<const PointField> point_fields, VtuEncoding encoding) {
   validate_vtu_input(points, {}, point_fields, {});
-  constexpr int kVtkVertex = 1;
+  constexpr std::uint8_t kVtkVertex = 1;
   CellArrays arrays;
   for (int i = 0; i < int(points.size()); ++i) {
     arrays.connectivity.push_back(i);
     arrays.offsets.push_back(i + 1);
     arrays.types.push_back(kVtkVertex);
   }
-  write_grid(path, points, arrays, point_fields, {});
+  write_grid(path, points, arrays, point_fields, {}, encoding);
 }
 
 void write_pvd(const std::filesystem::path& path, std::span<const PvdEntry> entries) {

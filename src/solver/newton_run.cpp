@@ -199,7 +199,8 @@ RunReport run_newton(const Scene& scene, const RunOptions& options) {
   const Model& model = sim.model();
   fem::Problem problem = newton_problem(scene, model);
   std::filesystem::create_directories(options.output_dir);
-  ResultWriter out(options.output_dir, scene.file.stem().string(), model, scene.output.vtk);
+  ResultWriter out(options.output_dir, scene.file.stem().string(), model, scene.output.vtk,
+                   scene.output.format);
   RunReport report;
   report.mode = "static";
   report.newton = true;

@@ -299,7 +299,8 @@ RunReport run_scene(const Scene& scene, const RunOptions& options) {
         "or data file it reads changed?); start a new run",
         options.output_dir.string(), scene.file.string()));
   std::filesystem::create_directories(options.output_dir);
-  ResultWriter out(options.output_dir, scene.file.stem().string(), model, scene.output.vtk);
+  ResultWriter out(options.output_dir, scene.file.stem().string(), model, scene.output.vtk,
+                   scene.output.format);
 
   RunReport report;
   report.nodes = model.node_count();

@@ -92,6 +92,99 @@ TEST(RunOutput, SeriesMonitorsAndReportReadBack) {
   EXPECT_GE(stepping_factor, factor);
 }
 
+// Reads two runs' series with meshio and prints how many frames hold the same bits in every
+// array (points, point and cell data, cells) and the frames' total sizes.
+constexpr const char* kCompare = R"(import sys, os, xml.etree.ElementTree as ET
+import meshio, numpy as np
+a, b = sys.argv[1], sys.argv[2]
+def files(d):
+    sets = ET.parse(os.path.join(d, 'jelly.pvd')).getroot().find('Collection').findall('DataSet')
+    return [os.path.join(d, s.get('file')) for s in sets]
+def same(x, y):
+    x, y = np.asarray(x), np.asarray(y)
+    return x.dtype == y.dtype and x.shape == y.shape and x.tobytes() == y.tobytes()
+fa, fb = files(a), files(b)
+equal = 0
+for x, y in zip(fa, fb):
+    p, q = meshio.read(x), meshio.read(y)
+    ok = same(p.points, q.points) and len(p.cells) == len(q.cells)
+    ok = ok and all(c.type == d.type and same(c.data, d.data) for c, d in zip(p.cells, q.cells))
+    ok = ok and sorted(p.point_data) == sorted(q.point_data) == ['displacement', 'force', 'velocity']
+    ok = ok and all(same(p.point_data[k], q.point_data[k]) for k in p.point_data)
+    ok = ok and all(same(u, v) for u, v in zip(p.cell_data['component'], q.cell_data['component']))
+    equal += ok
+print('frames', len(fa), len(fb), 'equal', equal, 'bytes', sum(map(os.path.getsize, fa)),
+      sum(map(os.path.getsize, fb)))
+)";
+
+// `output.format: binary` writes the same frames as ASCII, bit for bit, in raw appended data.
+TEST(RunOutput, BinaryFramesHoldTheAsciiFramesBits) {
+  testing::TempDir dir;
+  std::ofstream(dir.path() / "jelly.yaml") << kScene;
+  std::filesystem::create_directories(dir.path() / "binary");
+  std::ofstream(dir.path() / "binary" / "jelly.yaml") << kScene << "  format: binary\n";
+  for (const char* scene : {"jelly.yaml", "binary/jelly.yaml"}) {
+    const auto out = dir.path() / (std::string(scene) + ".out");
+    const auto run = run_command(testing::cli() + " run -q " + (dir.path() / scene).string() +
+                                 " -o " + out.string());
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+  }
+  const auto binary_frame = dir.path() / "binary/jelly.yaml.out" / "jelly_000004.vtu";
+  EXPECT_NE(testing::read_text(binary_frame).find("<AppendedData encoding=\"raw\">"),
+            std::string::npos);
+  const auto script = dir.path() / "compare.py";
+  std::ofstream(script) << kCompare;
+  const auto read = run_command("/usr/bin/python3 " + script.string() + " " +
+                                (dir.path() / "jelly.yaml.out").string() + " " +
+                                (dir.path() / "binary/jelly.yaml.out").string());
+  ASSERT_EQ(read.exit_code, 0) << read.output;
+  std::istringstream in(read.output);
+  std::string key;
+  int ascii_frames = 0, binary_frames = 0, equal = 0;
+  long ascii_bytes = 0, binary_bytes = 0;
+  in >> key >> ascii_frames >> binary_frames >> key >> equal >> key >> ascii_bytes >> binary_bytes;
+  EXPECT_EQ(ascii_frames, 5) << read.output;
+  EXPECT_EQ(binary_frames, 5);
+  EXPECT_EQ(equal, 5);
+  // 8 bytes a double against its shortest text (about 20 characters and a separator).
+  EXPECT_LT(binary_bytes, ascii_bytes);
+}
+
+// `phymul run --format` decides over the scene's output.format, both ways.
+TEST(RunOutput, FormatFlagOverridesTheScene) {
+  testing::TempDir dir;
+  std::ofstream(dir.path() / "jelly.yaml") << kScene << "  format: binary\n";
+  const auto scene = (dir.path() / "jelly.yaml").string();
+  for (const char* format : {"ascii", "binary"}) {
+    const auto out = dir.path() / format;
+    const auto run = run_command(testing::cli() + " run -q " + scene + " --format " + format +
+                                 " -o " + out.string());
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    const std::string frame = testing::read_text(out / "jelly_000002.vtu");
+    const bool raw = frame.find("<AppendedData encoding=\"raw\">") != std::string::npos;
+    const bool text = frame.find("format=\"ascii\"") != std::string::npos;
+    EXPECT_EQ(raw, std::string(format) == "binary") << format;
+    EXPECT_EQ(text, std::string(format) == "ascii") << format;
+  }
+  const auto bad = run_command(testing::cli() + " run -q " + scene + " --format xml -o " +
+                               (dir.path() / "xml").string());
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("--format"), std::string::npos) << bad.output;
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "xml"));
+}
+
+TEST(RunOutput, UnknownFormatIsRejectedNamingTheChoices) {
+  testing::TempDir dir;
+  const auto scene = dir.path() / "jelly.yaml";
+  std::ofstream(scene) << kScene << "  format: hdf5\n";
+  const auto r = run_command(testing::cli() + " check " + scene.string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("format"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("hdf5"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("binary"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("jelly.yaml:15:11:"), std::string::npos) << r.output;
+}
+
 }  // namespace
 }  // namespace phymul
 
