@@ -72,9 +72,11 @@ void expect_complete(const fs::path& dir, const std::vector<double>& times) {
     EXPECT_TRUE(fs::is_regular_file(dir / body[k].file));
     EXPECT_TRUE(fs::is_regular_file(dir / floor[k].file));
   }
-  for (const auto& e : fs::directory_iterator(dir))
-    if (e.path().filename() != "monitors.csv.tmp")  // finish() completes monitors.csv
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (e.path().filename() != "monitors.csv.tmp") {  // finish() completes monitors.csv
       EXPECT_NE(e.path().extension(), ".tmp") << "left behind: " << e.path();
+    }
+  }
 }
 
 TEST(ResultWriter, FinishedSeriesListEveryFrame) {
