@@ -9,6 +9,8 @@
 #include <immintrin.h>
 #endif
 
+#include "forces/lane_algebra.hpp"
+
 namespace phymul {
 namespace {
 
@@ -20,36 +22,11 @@ static_assert(W == 4, "the gathers below spell out four lanes");
 using D = double __attribute__((vector_size(W * sizeof(double))));
 using Mask = long long __attribute__((vector_size(W * sizeof(long long))));
 
-// The helpers below pass lane vectors by value; they are all inlined, so the note that AVX
-// changes the calling convention of such functions does not apply.
-#pragma GCC diagnostic ignored "-Wpsabi"
-#define PHYMUL_LANES [[gnu::always_inline]] inline
+using V3 = lanes::V3<D>;
+using M3 = lanes::M3<D>;
+using Q = lanes::Q<D>;
+using Sym3 = lanes::Sym3<D>;
 
-struct V3 {
-  D v[3];
-};
-struct M3 {
-  D a[3][3];  // [row][column]
-};
-struct Q {
-  D w, x, y, z;
-};
-
-PHYMUL_LANES V3 operator+(const V3& a, const V3& b) {
-  return {{a.v[0] + b.v[0], a.v[1] + b.v[1], a.v[2] + b.v[2]}};
-}
-PHYMUL_LANES V3 operator-(const V3& a, const V3& b) {
-  return {{a.v[0] - b.v[0], a.v[1] - b.v[1], a.v[2] - b.v[2]}};
-}
-PHYMUL_LANES V3 operator*(const V3& a, D s) { return {{a.v[0] * s, a.v[1] * s, a.v[2] * s}}; }
-PHYMUL_LANES V3 operator/(const V3& a, D s) { return {{a.v[0] / s, a.v[1] / s, a.v[2] / s}}; }
-PHYMUL_LANES D dot(const V3& a, const V3& b) {
-  return a.v[0] * b.v[0] + a.v[1] * b.v[1] + a.v[2] * b.v[2];
-}
-PHYMUL_LANES V3 cross(const V3& a, const V3& b) {
-  return {{a.v[1] * b.v[2] - a.v[2] * b.v[1], a.v[2] * b.v[0] - a.v[0] * b.v[2],
-           a.v[0] * b.v[1] - a.v[1] * b.v[0]}};
-}
 PHYMUL_LANES D splat(double s) { return D{} + s; }
 PHYMUL_LANES D lane_sqrt(const D& v) {
 #if defined(__AVX__)
@@ -117,52 +94,6 @@ PHYMUL_LANES void subtract3(double* p, const double* row) {
   xy -= r;
   std::memcpy(p, &xy, sizeof xy);
   p[2] -= row[2];
-}
-
-PHYMUL_LANES V3 times(const M3& M, const V3& u) {
-  V3 r;
-  for (int a = 0; a < 3; ++a) r.v[a] = M.a[a][0] * u.v[0] + M.a[a][1] * u.v[1] + M.a[a][2] * u.v[2];
-  return r;
-}
-PHYMUL_LANES V3 transpose_times(const M3& M, const V3& u) {
-  V3 r;
-  for (int a = 0; a < 3; ++a) r.v[a] = M.a[0][a] * u.v[0] + M.a[1][a] * u.v[1] + M.a[2][a] * u.v[2];
-  return r;
-}
-PHYMUL_LANES M3 transpose_times(const M3& R, const M3& A) {
-  M3 S;
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b)
-      S.a[a][b] = R.a[0][a] * A.a[0][b] + R.a[1][a] * A.a[1][b] + R.a[2][a] * A.a[2][b];
-  return S;
-}
-
-// Eigen's Quaternion::toRotationMatrix, lane by lane.
-PHYMUL_LANES M3 rotation_matrix(const Q& q) {
-  const D tx = 2.0 * q.x, ty = 2.0 * q.y, tz = 2.0 * q.z;
-  const D twx = tx * q.w, twy = ty * q.w, twz = tz * q.w;
-  const D txx = tx * q.x, txy = ty * q.x, txz = tz * q.x;
-  const D tyy = ty * q.y, tyz = tz * q.y, tzz = tz * q.z;
-  M3 R;
-  R.a[0][0] = 1.0 - (tyy + tzz), R.a[0][1] = txy - twz, R.a[0][2] = txz + twy;
-  R.a[1][0] = txy + twz, R.a[1][1] = 1.0 - (txx + tzz), R.a[1][2] = tyz - twx;
-  R.a[2][0] = txz - twy, R.a[2][1] = tyz + twx, R.a[2][2] = 1.0 - (txx + tyy);
-  return R;
-}
-
-// tr(S) I - sym(S) (shape_memory.cpp's rotation_hessian), its upper triangle.
-struct Sym3 {
-  D m00, m01, m02, m11, m12, m22;
-};
-PHYMUL_LANES Sym3 rotation_hessian(const M3& S) {
-  const D trace = S.a[0][0] + S.a[1][1] + S.a[2][2];
-  return {trace - S.a[0][0], -(0.5 * (S.a[0][1] + S.a[1][0])), -(0.5 * (S.a[0][2] + S.a[2][0])),
-          trace - S.a[1][1], -(0.5 * (S.a[1][2] + S.a[2][1])), trace - S.a[2][2]};
-}
-
-PHYMUL_LANES V3 axial_of_skew(const M3& S) {
-  return {{0.5 * (S.a[2][1] - S.a[1][2]), 0.5 * (S.a[0][2] - S.a[2][0]),
-           0.5 * (S.a[1][0] - S.a[0][1])}};
 }
 
 // shape_memory.cpp's solve_positive_definite: the lanes where M is safely positive definite

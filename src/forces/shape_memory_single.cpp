@@ -12,6 +12,8 @@
 #include <immintrin.h>
 #endif
 
+#include "forces/lane_algebra.hpp"
+
 namespace phymul {
 namespace {
 
@@ -25,34 +27,11 @@ using F = float __attribute__((vector_size(W * sizeof(float))));
 using Mask = int __attribute__((vector_size(W * sizeof(int))));
 using Row = double __attribute__((vector_size(4 * sizeof(double))));  // (x, y, z, *), double
 
-// The helpers pass lane vectors by value and are all inlined (see shape_memory_batch.cpp).
-#pragma GCC diagnostic ignored "-Wpsabi"
-#define PHYMUL_LANES [[gnu::always_inline]] inline
+using V3 = lanes::V3<F>;
+using M3 = lanes::M3<F>;
+using Q = lanes::Q<F>;
+using Sym3 = lanes::Sym3<F>;
 
-struct V3 {
-  F v[3];
-};
-struct M3 {
-  F a[3][3];  // [row][column]
-};
-struct Q {
-  F w, x, y, z;
-};
-
-PHYMUL_LANES V3 operator+(const V3& a, const V3& b) {
-  return {{a.v[0] + b.v[0], a.v[1] + b.v[1], a.v[2] + b.v[2]}};
-}
-PHYMUL_LANES V3 operator-(const V3& a, const V3& b) {
-  return {{a.v[0] - b.v[0], a.v[1] - b.v[1], a.v[2] - b.v[2]}};
-}
-PHYMUL_LANES V3 operator*(const V3& a, F s) { return {{a.v[0] * s, a.v[1] * s, a.v[2] * s}}; }
-PHYMUL_LANES F dot(const V3& a, const V3& b) {
-  return a.v[0] * b.v[0] + a.v[1] * b.v[1] + a.v[2] * b.v[2];
-}
-PHYMUL_LANES V3 cross(const V3& a, const V3& b) {
-  return {{a.v[1] * b.v[2] - a.v[2] * b.v[1], a.v[2] * b.v[0] - a.v[0] * b.v[2],
-           a.v[0] * b.v[1] - a.v[1] * b.v[0]}};
-}
 PHYMUL_LANES F splat(float s) { return F{} + s; }
 PHYMUL_LANES F lane_sqrt(const F& v) {
 #if defined(__AVX__)
@@ -157,50 +136,6 @@ PHYMUL_LANES Q load_rotations(std::span<const Eigen::Quaterniond> rotations, con
     for (int a = 0; a < 4; ++a) c[a][l] = float(rotations[ks[l]].coeffs()[a]);
 #endif
   return {c[3], c[0], c[1], c[2]};
-}
-
-PHYMUL_LANES V3 times(const M3& M, const V3& u) {
-  V3 r;
-  for (int a = 0; a < 3; ++a) r.v[a] = M.a[a][0] * u.v[0] + M.a[a][1] * u.v[1] + M.a[a][2] * u.v[2];
-  return r;
-}
-PHYMUL_LANES V3 transpose_times(const M3& M, const V3& u) {
-  V3 r;
-  for (int a = 0; a < 3; ++a) r.v[a] = M.a[0][a] * u.v[0] + M.a[1][a] * u.v[1] + M.a[2][a] * u.v[2];
-  return r;
-}
-PHYMUL_LANES M3 transpose_times(const M3& R, const M3& A) {
-  M3 S;
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b)
-      S.a[a][b] = R.a[0][a] * A.a[0][b] + R.a[1][a] * A.a[1][b] + R.a[2][a] * A.a[2][b];
-  return S;
-}
-
-PHYMUL_LANES M3 rotation_matrix(const Q& q) {
-  const F tx = 2.0f * q.x, ty = 2.0f * q.y, tz = 2.0f * q.z;
-  const F twx = tx * q.w, twy = ty * q.w, twz = tz * q.w;
-  const F txx = tx * q.x, txy = ty * q.x, txz = tz * q.x;
-  const F tyy = ty * q.y, tyz = tz * q.y, tzz = tz * q.z;
-  M3 R;
-  R.a[0][0] = 1.0f - (tyy + tzz), R.a[0][1] = txy - twz, R.a[0][2] = txz + twy;
-  R.a[1][0] = txy + twz, R.a[1][1] = 1.0f - (txx + tzz), R.a[1][2] = tyz - twx;
-  R.a[2][0] = txz - twy, R.a[2][1] = tyz + twx, R.a[2][2] = 1.0f - (txx + tyy);
-  return R;
-}
-
-struct Sym3 {
-  F m00, m01, m02, m11, m12, m22;
-};
-PHYMUL_LANES Sym3 rotation_hessian(const M3& S) {
-  const F trace = S.a[0][0] + S.a[1][1] + S.a[2][2];
-  return {trace - S.a[0][0], -(0.5f * (S.a[0][1] + S.a[1][0])), -(0.5f * (S.a[0][2] + S.a[2][0])),
-          trace - S.a[1][1], -(0.5f * (S.a[1][2] + S.a[2][1])), trace - S.a[2][2]};
-}
-
-PHYMUL_LANES V3 axial_of_skew(const M3& S) {
-  return {{0.5f * (S.a[2][1] - S.a[1][2]), 0.5f * (S.a[0][2] - S.a[2][0]),
-           0.5f * (S.a[1][0] - S.a[0][1])}};
 }
 
 // The float adjugate's determinant carries a round-off of a few eps scale^3 (eps = 6e-8): a
