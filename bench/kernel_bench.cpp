@@ -32,30 +32,47 @@ Snapshot snapshot(Simulator& sim) {
   return snap;
 }
 
+// The pushed cube at its snapshot, and the pass's inputs, reset (untimed) before each pass.
+struct PassInputs {
+  explicit PassInputs(int cells)
+      : sim(bench::pushed_cube(cells)),
+        snap(snapshot(sim)),
+        m(sim.model().shape_memory[0]),
+        rotation(snap.rotation),
+        f(snap.x.size()) {}
+  void reset() {
+    std::copy(snap.rotation.begin(), snap.rotation.end(), rotation.begin());
+    std::fill(f.begin(), f.end(), Vec3::Zero());
+  }
+  template <class Pass>
+  double run(Pass pass) {
+    return pass(m, sim.model().rest_position, snap.x, rotation, f);
+  }
+  Simulator sim;
+  const Snapshot snap;
+  const ShapeMemory& m;
+  std::vector<Eigen::Quaterniond> rotation;
+  std::vector<Vec3> f;
+};
+
 // pass: add_shape_memory_forces or its single-precision variant.
 template <class Pass>
 void time_pass(benchmark::State& state, Pass pass) {
   omp_set_num_threads(int(state.range(1)));
-  Simulator sim(bench::pushed_cube(int(state.range(0))));
-  const Snapshot snap = snapshot(sim);
-  const Model& model = sim.model();
-  const ShapeMemory& m = model.shape_memory[0];
-  std::vector<Eigen::Quaterniond> rotation = snap.rotation;
-  std::vector<Vec3> f(snap.x.size());
+  PassInputs in(int(state.range(0)));
   double energy = 0.0;
   double seconds = 0.0, cpu_seconds = 0.0;
   for (auto _ : state) {
-    std::copy(snap.rotation.begin(), snap.rotation.end(), rotation.begin());
-    std::fill(f.begin(), f.end(), Vec3::Zero());
+    in.reset();
     const auto start = std::chrono::steady_clock::now();
     const double cpu_start = thread_cpu_seconds();
-    energy = pass(m, model.rest_position, snap.x, rotation, f);
+    energy = in.run(pass);
     cpu_seconds += thread_cpu_seconds() - cpu_start;
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
   benchmark::DoNotOptimize(energy);
-  state.counters["memory_nodes"] = double(m.nodes.size());
-  const double passes = double(m.nodes.size()) * double(state.iterations());
+  state.counters["memory_nodes"] = double(in.m.nodes.size());
+  const double passes = double(in.m.nodes.size()) * double(state.iterations());
   state.counters["ns_per_node"] = seconds * 1e9 / passes;
   // This thread's CPU time (one thread): the pass's cost when a busy machine shares the core.
   state.counters["cpu_ns_per_node"] = cpu_seconds * 1e9 / passes;
@@ -72,25 +89,18 @@ void BM_ShapeMemoryPassSingle(benchmark::State& state) {
 // separate benchmarks would each meet different load.
 void BM_ShapeMemoryPassDoubleVsSingle(benchmark::State& state) {
   omp_set_num_threads(int(state.range(1)));
-  Simulator sim(bench::pushed_cube(int(state.range(0))));
-  const Snapshot snap = snapshot(sim);
-  const Model& model = sim.model();
-  const ShapeMemory& m = model.shape_memory[0];
-  std::vector<Eigen::Quaterniond> rotation = snap.rotation;
-  std::vector<Vec3> f(snap.x.size());
+  PassInputs in(int(state.range(0)));
   std::vector<double> ns[2];  // per node: double, single
   double energy = 0.0;
   for (auto _ : state)
     for (int precision = 0; precision < 2; ++precision) {
-      std::copy(snap.rotation.begin(), snap.rotation.end(), rotation.begin());
-      std::fill(f.begin(), f.end(), Vec3::Zero());
+      in.reset();
       const auto start = std::chrono::steady_clock::now();
-      energy += precision == 0
-                    ? add_shape_memory_forces(m, model.rest_position, snap.x, rotation, f)
-                    : add_shape_memory_forces_single(m, model.rest_position, snap.x, rotation, f);
+      energy +=
+          precision == 0 ? in.run(add_shape_memory_forces) : in.run(add_shape_memory_forces_single);
       ns[precision].push_back(
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() * 1e9 /
-          double(m.nodes.size()));
+          double(in.m.nodes.size()));
     }
   benchmark::DoNotOptimize(energy);
   for (std::vector<double>& t : ns) std::sort(t.begin(), t.end());

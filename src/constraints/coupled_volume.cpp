@@ -392,7 +392,6 @@ bool project_coupled_volumes(const Model& model, std::span<Vec3> x, double load_
       linearise(model, x, grad, a, &volumes, /*keep=*/true);
       if (!keep_factor(model, n, a)) return false;
     } else {
-      model.coupled_factor_valid = false;
       for (int k = 0; k < n; ++k) volumes[size_t(k)] = volume(model.volumes[size_t(k)], x);
     }
     const double before = worst;

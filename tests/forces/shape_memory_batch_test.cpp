@@ -18,12 +18,6 @@ Model block() {
                                    testing::material(50.0));
 }
 
-Eigen::Quaterniond small_turn(std::mt19937& rng, double angle) {
-  std::normal_distribution<double> n(0.0, 1.0);
-  const Vec3 axis = Vec3(n(rng), n(rng), n(rng)).normalized();
-  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis));
-}
-
 // The block turned by a random rotation, bent and shaken (0.5 mm noise on 5 mm cells), with
 // rotations that start converged but for a small turn (the lanes' case) or from the identity,
 // far from the node's best fit (the scalar fallback's case).
@@ -46,7 +40,7 @@ Deformed deformed(const Model& model, std::mt19937& rng) {
     Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
     attraction_position(m, k, model.rest_position, d.x, q);  // converged
     d.rotations.push_back(cold(rng) == 0 ? Eigen::Quaterniond::Identity()
-                                         : q * small_turn(rng, 0.02));
+                                         : q * testing::small_turn(rng, 0.02));
   }
   return d;
 }
@@ -192,7 +186,7 @@ TEST(ShapeMemoryBatch, ZeroForceUnderARigidRotation) {
       // Warm rotations a little off the true one: the lanes turn them back.
       std::vector<Eigen::Quaterniond> q;
       for (size_t k = 0; k < m.nodes.size(); ++k)
-        q.push_back(Eigen::Quaterniond(R) * small_turn(rng, 1e-3));
+        q.push_back(Eigen::Quaterniond(R) * testing::small_turn(rng, 1e-3));
       std::vector<Vec3> f(x.size(), Vec3::Zero());
       int in_lanes = 0, lanes = 0;
       for (int b = 0; b < m.plan.blocks(); ++b)

@@ -40,12 +40,6 @@ Model icosphere() {
                                    testing::surface_material(50.0, 0.1, FrameMode::polar));
 }
 
-Eigen::Quaterniond small_turn(std::mt19937& rng, double angle) {
-  std::normal_distribution<double> n(0.0, 1.0);
-  const Vec3 axis = Vec3(n(rng), n(rng), n(rng)).normalized();
-  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis));
-}
-
 // The body rotated at random, bent, sheared and shaken (noise in m), moved by t; every memory's
 // rotation one step old (converged, then turned by 5 mrad), as a dynamic step finds them.
 struct Deformed {
@@ -65,7 +59,7 @@ Deformed deformed(const Model& model, std::mt19937& rng, double noise, const Vec
   for (int k = 0; k < int(m.nodes.size()); ++k) {
     Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
     attraction_position(m, k, model.rest_position, d.x, q);
-    d.rotations.push_back(q * small_turn(rng, 0.005));
+    d.rotations.push_back(q * testing::small_turn(rng, 0.005));
   }
   return d;
 }
@@ -175,7 +169,7 @@ TEST(ShapeMemorySingle, ZeroForceUnderARigidRotation) {
       for (const Vec3& X : model.rest_position) x.push_back(R * X + t);
       std::vector<Eigen::Quaterniond> q;
       for (size_t k = 0; k < m.nodes.size(); ++k)
-        q.push_back(Eigen::Quaterniond(R) * small_turn(rng, 1e-3));
+        q.push_back(Eigen::Quaterniond(R) * testing::small_turn(rng, 1e-3));
       std::vector<Vec3> f(x.size(), Vec3::Zero());
       const double energy = add_shape_memory_forces_single(m, model.rest_position, x, q, f);
       const double h = longest_offset(m, model.rest_position, x);

@@ -39,6 +39,13 @@ inline Eigen::Matrix3d random_rotation(std::mt19937& rng) {
   return q.normalized().toRotationMatrix();
 }
 
+// A turn by `angle` (rad) about a random axis.
+inline Eigen::Quaterniond small_turn(std::mt19937& rng, double angle) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  const Vec3 axis = Vec3(n(rng), n(rng), n(rng)).normalized();
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis));
+}
+
 // The closed surface around the cells of `mesh` whose centroid satisfies `keep`, in the
 // mesh's node ids (the model's, for a single-component model).
 template <class Keep>
