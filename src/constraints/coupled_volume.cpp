@@ -410,11 +410,8 @@ bool project_coupled_volume_velocities(const Model& model, std::span<const Vec3>
   if (kept_linearisation_at(model, x)) {
     std::copy_n(model.coupled_factor.begin(), kMax * kMax, a.begin());
   } else {
-    model.coupled_factor_valid = false;
     linearise(model, x, grad, a, nullptr, /*keep=*/true);
-    if (!cholesky(n, a)) return false;
-    std::copy(a.begin(), a.end(), model.coupled_factor.begin());
-    model.coupled_factor_valid = true;
+    if (!keep_factor(model, n, a)) return false;
   }
   Column rates{};  // dV_k/dt
   for (int k = 0; k < n; ++k) {
