@@ -127,6 +127,7 @@ class Simulator {
   void step_verlet(double dt, double load_time);
   void step_newton_cotes(double dt, double load_time);
   void check_stability() const;
+  InstabilityError non_finite_energy() const;  // which cell, if a finite element inverted
   // check_stability; when it fails, the state goes back to before the step, then it throws.
   void checked_step(double time, double previous_load);
   StaticResult continue_relax(double load_time, long max_iterations,

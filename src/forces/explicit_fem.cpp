@@ -4,6 +4,7 @@
 
 #include <Eigen/LU>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "fem/constitutive.hpp"
@@ -76,8 +77,18 @@ void add_tetra(ExplicitFem& fem, const std::string& component, int cell, const C
   fem.hourglass_stiffness.push_back(0.0);
 }
 
+template <int N>
+Mat3 displacement_gradient(const ExplicitFem& fem, int e, std::span<const Vec3> rest,
+                           std::span<const Vec3> x, Eigen::Matrix<double, 3, N>& U) {
+  const int* nodes = fem.cells.data() + size_t(e) * N;
+  const Eigen::Map<const Eigen::Matrix<double, N, 3, Eigen::RowMajor>> G(fem.gradient.data() +
+                                                                         size_t(e) * N * 3);
+  for (int a = 0; a < N; ++a) U.col(a) = x[nodes[a]] - rest[nodes[a]];
+  return U * G;
+}
+
 // Internal forces of one cell: -V P grad N (P the first Piola-Kirchhoff stress), plus the
-// hourglass forces; returns the cell's energy.
+// hourglass forces; returns the cell's energy, NaN where the cell is inverted.
 template <int N>
 double cell_forces(const ExplicitFem& fem, int e, std::span<const Vec3> rest,
                    std::span<const Vec3> x, std::span<Vec3> f) {
@@ -85,8 +96,7 @@ double cell_forces(const ExplicitFem& fem, int e, std::span<const Vec3> rest,
   const Eigen::Map<const Eigen::Matrix<double, N, 3, Eigen::RowMajor>> G(fem.gradient.data() +
                                                                          size_t(e) * N * 3);
   Eigen::Matrix<double, 3, N> U;
-  for (int a = 0; a < N; ++a) U.col(a) = x[nodes[a]] - rest[nodes[a]];
-  const Mat3 grad_u = U * G;
+  const Mat3 grad_u = displacement_gradient<N>(fem, e, rest, x, U);
   const Mat3 F = Mat3::Identity() + grad_u;
   const double j_minus_one = ::phymul::fem::det_minus_one(grad_u);
   const double J = 1.0 + j_minus_one;
@@ -107,7 +117,21 @@ double cell_forces(const ExplicitFem& fem, int e, std::span<const Vec3> rest,
     energy += 0.5 * k * q.squaredNorm();
   }
   for (int a = 0; a < N; ++a) f[nodes[a]] += fe.col(a);
-  return energy;
+  // cbrt keeps the sign, so an inverted cell's stress is finite: the energy carries the alarm
+  // (the simulator's check reads it; a step with it is undone).
+  return J > 0.0 ? energy : std::numeric_limits<double>::quiet_NaN();
+}
+
+template <int N>
+InvertedCell first_inverted(const ExplicitFem& fem, std::span<const Vec3> rest,
+                            std::span<const Vec3> x) {
+  Eigen::Matrix<double, 3, N> U;
+  for (int e = 0; e < int(fem.volume.size()); ++e) {
+    const double J =
+        1.0 + ::phymul::fem::det_minus_one(displacement_gradient<N>(fem, e, rest, x, U));
+    if (!(J > 0.0)) return {e, J, std::span<const int>(fem.cells.data() + size_t(e) * N, N)};
+  }
+  return {};
 }
 
 }  // namespace
@@ -160,6 +184,12 @@ double add_explicit_fem_forces(const ExplicitFem& fem, std::span<const Vec3> res
   if (fem.nodes_per_cell == 8)
     return run_coloured(fem.plan, [&](int e) { return cell_forces<8>(fem, e, rest, x, f); });
   return run_coloured(fem.plan, [&](int e) { return cell_forces<4>(fem, e, rest, x, f); });
+}
+
+InvertedCell first_inverted_cell(const ExplicitFem& fem, std::span<const Vec3> rest,
+                                 std::span<const Vec3> x) {
+  return fem.nodes_per_cell == 8 ? first_inverted<8>(fem, rest, x)
+                                 : first_inverted<4>(fem, rest, x);
 }
 
 void add_explicit_fem_rows(const ExplicitFem& fem, std::span<double> row) {

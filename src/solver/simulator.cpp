@@ -1,6 +1,7 @@
 #include "phymul/simulator.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
@@ -14,6 +15,7 @@
 #include "constraints/coupled_volume.hpp"
 #include "constraints/deformable_contact.hpp"
 #include "constraints/doubled.hpp"
+#include "forces/explicit_fem.hpp"
 #include "forces/forces.hpp"
 #include "solver/rigid.hpp"
 #include "solver/runaway_guard.hpp"
@@ -375,6 +377,30 @@ void Simulator::step_newton_cotes(double h, double load_time) {
   load_time_ = load_time;
 }
 
+InstabilityError Simulator::non_finite_energy() const {
+  const State& s = state_;
+  for (const ExplicitFem& fem : model_.explicit_fem) {
+    const InvertedCell bad = first_inverted_cell(fem, model_.rest_position, s.x);
+    if (bad.cell < 0) continue;
+    return InstabilityError(
+        fmt::format("the simulation stopped at t = {:.6g} s (step {}): a finite-element cell of "
+                    "component '{}' is inverted (J = det F = {:.3g} at its centre; corners: "
+                    "nodes {}). A node was pushed through the opposite side of its cell. Lower "
+                    "or slow the load, refine the mesh there, take a smaller dt if the motion is "
+                    "fast (dt {:.3g} s, stability estimate {:.3g} s), or use the shape-memory "
+                    "model, which has no inverted state.",
+                    s.time, s.step, fem.component, bad.J, fmt::join(bad.nodes, ", "), dt_,
+                    stable_dt_),
+        bad.nodes[0], s.time);
+  }
+  return InstabilityError(
+      fmt::format("the simulation became unstable at t = {:.6g} s (step {}): the elastic energy "
+                  "is not finite while every node is. Set simulation.dt smaller (now {:.3g} s, "
+                  "stability estimate {:.3g} s) or check the stiffness and masses.",
+                  s.time, s.step, dt_, stable_dt_),
+      -1, s.time);
+}
+
 void Simulator::check_stability() const {
   const State& s = state_;
   auto unstable = [&](int i, const std::string& what) {
@@ -419,6 +445,8 @@ void Simulator::check_stability() const {
                                 moved, size_scale_)
                   : std::string("has a non-finite position or velocity"));
   }
+  // An inverted finite element leaves its nodes finite; its energy is the alarm.
+  if (!std::isfinite(s.shape_memory_energy)) throw non_finite_energy();
   if (steps_surely_within_bound(largest_step2, shortest_edge_overall_)) return;
   if (const auto r = find_runaway(model_, shortest_edge_, x_start_, s.x))
     throw unstable(r->node,

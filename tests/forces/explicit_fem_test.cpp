@@ -111,6 +111,27 @@ TEST_P(ExplicitFemCells, PatchTestMatchesTheAnalyticStress) {
   EXPECT_NEAR((face - expected).norm(), 0.0, 1e-9 * expected.norm()) << face.transpose();
 }
 
+TEST_P(ExplicitFemCells, AnInvertedCellHasNoEnergyAndIsNamed) {
+  const Model model = block(GetParam());
+  const ExplicitFem& fem = model.explicit_fem[0];
+  // Squeezed to half its height: J = 0.5 everywhere, a finite energy and no inverted cell.
+  std::vector<Vec3> x = model.rest_position;
+  for (Vec3& p : x) p.z() *= 0.5;
+  EXPECT_TRUE(std::isfinite(evaluate(model, x).energy));
+  EXPECT_EQ(first_inverted_cell(fem, model.rest_position, x).cell, -1);
+  // Mirrored through z = 0: J = -1 in every cell. The forces stay finite (cbrt keeps the
+  // sign), so only the energy can tell.
+  for (Vec3& p : x) p.z() *= -2.0;
+  const Evaluation mirrored = evaluate(model, x);
+  for (const Vec3& f : mirrored.f) EXPECT_TRUE(f.allFinite());
+  EXPECT_TRUE(std::isnan(mirrored.energy));
+  const InvertedCell bad = first_inverted_cell(fem, model.rest_position, x);
+  EXPECT_EQ(bad.cell, 0);
+  EXPECT_NEAR(bad.J, -1.0, 1e-12);
+  ASSERT_EQ(int(bad.nodes.size()), fem.nodes_per_cell);
+  EXPECT_EQ(bad.nodes.data(), fem.cells.data());
+}
+
 INSTANTIATE_TEST_SUITE_P(Cells, ExplicitFemCells,
                          ::testing::Values(CellType::hexa, CellType::tetra));
 
@@ -205,6 +226,41 @@ Compression compress(CellType type, int n) {
   for (int i : top) out.reference_force -= solved.reaction[i].z();
   out.reference_bulge = solved.displacement[corner].x();
   return out;
+}
+
+// A 10 mm cube of 2^3 hexahedra, base held, its top driven down through the base in 0.1 s:
+// the step that inverts a cell is undone, and the error names that cell.
+TEST(ExplicitFem, DynamicsStopAtTheFirstInvertedCellAndKeepTheLastGoodState) {
+  const Mesh mesh = make_box(Vec3(0.01, 0.01, 0.01), {2, 2, 2}, CellType::hexa);
+  Model model;
+  add_elastic_component(model, "cube", mesh, fem_material());
+  add_fixed_nodes(model, mesh.node_sets.at("bottom"));
+  add_prescribed_displacement(model, {mesh.node_sets.at("top"),
+                                      {true, true, true},
+                                      Schedule{{0.0, 0.1}, {Vec3::Zero(), Vec3(0, 0, -0.015)}}});
+  model.settings.duration = 0.2;
+  finalize(model);
+  Simulator sim(model);
+  const ExplicitFem& fem = sim.model().explicit_fem[0];
+  std::string message;
+  double when = -1.0;
+  try {
+    while (sim.state().time < 0.2) sim.step();
+  } catch (const InstabilityError& e) {
+    message = e.what();
+    when = e.time;
+  }
+  ASSERT_FALSE(message.empty()) << "the top went through the base without an error";
+  std::printf("%s\n", message.c_str());
+  EXPECT_NE(message.find("finite-element cell of component 'cube' is inverted"), std::string::npos);
+  // Not before the top has come down by a layer (5 mm, at 1/30 s), nor after it passed the base.
+  EXPECT_GT(when, 0.1 / 3.0);
+  EXPECT_LT(when, 0.1 * 10.0 / 15.0 + 1e-9);
+  // The state kept is the step before: every cell upright, its energy finite (what a run
+  // writes), at the time before the failing step.
+  EXPECT_EQ(first_inverted_cell(fem, sim.model().rest_position, sim.state().x).cell, -1);
+  EXPECT_TRUE(std::isfinite(sim.state().shape_memory_energy));
+  EXPECT_NEAR(sim.state().time, when - sim.dt(), 1e-12);
 }
 
 TEST(ExplicitFem, CompressedCubeMatchesTheImplicitReference) {
