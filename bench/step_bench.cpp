@@ -33,6 +33,7 @@ void scalar_kernel_only(phymul::Model& model) {
   for (phymul::ShapeMemory& m : model.shape_memory) {
     for (size_t k = 0; k < m.batch_order.size(); ++k) m.batch_order[k] = int(k);
     m.batched_end.assign(m.plan.block_start.begin(), m.plan.block_start.end() - 1);
+    m.centred_start.assign(m.plan.block_start.begin() + 1, m.plan.block_start.end());
   }
 }
 

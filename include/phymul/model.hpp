@@ -40,9 +40,14 @@ struct ShapeMemory {
   ParallelPlan plan;     // memory nodes k in coloured blocks (solver/parallel_plan.hpp)
   // Polar mode's batched kernel (forces/shape_memory_batch.cpp): the memory nodes of each
   // block of `plan` reordered, the batched ones first (lanes of equal neighbour count, no
-  // normal pair), then the others in node order, from batched_end[block] on.
+  // normal pair), then the others in node order, from batched_end[block] on, then the
+  // centred ones from centred_start[block] on: nodes whose rest position is their rest
+  // neighbours' centroid (a regular grid's interior), whose attraction position is the
+  // current centroid whatever the rotation (add_centred_node_forces; their rotation is not
+  // kept).
   std::vector<int> batch_order;
   std::vector<int> batched_end;
+  std::vector<int> centred_start;
 };
 
 // Explicit finite elements of one component (TLED, Miller et al. 2007): total Lagrangian,

@@ -339,7 +339,7 @@ void memorise_rest_shape(ShapeMemory& m, std::span<const Vec3> rest) {
     visit(m.nodes[k]);  // a node's pass writes it and its neighbours
     for (int j : m.neighbours.row(k)) visit(j);
   });
-  plan_polar_batches(m);
+  plan_polar_batches(m, rest);
 }
 
 Vec3 attraction_position(const ShapeMemory& m, int k, std::span<const Vec3> rest,
@@ -387,14 +387,16 @@ namespace {
 double add_polar_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::span<const Vec3> x,
                         std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f) {
   // A memory whose plan changed after plan_polar_batches runs scalar, in node order.
-  const bool planned =
-      int(m.batched_end.size()) == m.plan.blocks() && m.batch_order.size() == m.nodes.size();
+  const bool planned = int(m.batched_end.size()) == m.plan.blocks() &&
+                       int(m.centred_start.size()) == m.plan.blocks() &&
+                       m.batch_order.size() == m.nodes.size();
   if (!planned)
     return run_coloured(m.plan,
                         [&](int k) { return add_polar_node_forces(m, k, rest, x, rotations, f); });
   return run_coloured_blocks(m.plan, [&](int b) {
     double energy = 0.0;
-    const int batched = m.batched_end[b], end = m.plan.block_start[b + 1];
+    const int batched = m.batched_end[b], centred = m.centred_start[b],
+              end = m.plan.block_start[b + 1];
     int p = m.plan.block_start[b];
     for (; p + 2 * kShapeMemoryLanes <= batched; p += 2 * kShapeMemoryLanes)
       add_polar_batch_pair_forces(m, m.batch_order.data() + p, rest, x, rotations, f, energy);
@@ -403,8 +405,9 @@ double add_polar_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::s
       std::copy_n(m.batch_order.begin() + p, kShapeMemoryLanes, ks.begin());
       energy += add_polar_batch_forces(m, ks, rest, x, rotations, f);
     }
-    for (; p < end; ++p)
+    for (; p < centred; ++p)
       energy += add_polar_node_forces(m, m.batch_order[p], rest, x, rotations, f);
+    for (; p < end; ++p) energy += add_centred_node_forces(m, m.batch_order[p], x, f);
     return energy;
   });
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <vector>
 
 #if defined(__AVX__)
@@ -145,17 +146,57 @@ PHYMUL_LANES Q turn(const Q& q, const V3& half) {
 
 }  // namespace
 
-void plan_polar_batches(ShapeMemory& m) {
+bool is_centred(const ShapeMemory& m, int k, std::span<const Vec3> rest) {
+  const auto row = m.neighbours.row(k);
+  if (row.empty()) return false;
+  const Vec3& X = rest[m.nodes[k]];
+  Vec3 sum = Vec3::Zero();
+  double longest = 0.0;
+  for (int j : row) {
+    sum += rest[j] - X;
+    longest = std::max(longest, (rest[j] - X).norm());
+  }
+  return (sum / double(row.size())).norm() <=
+         64.0 * std::numeric_limits<double>::epsilon() * longest;
+}
+
+double add_centred_node_forces(const ShapeMemory& m, int k, std::span<const Vec3> x,
+                               std::span<Vec3> f) {
+  // A node's x, y, z in one register (lane 3 zero): a handful of instructions a neighbour.
+  const auto row = m.neighbours.row(k);
+  const double* p = x.data()->data();
+  double* forces = f.data()->data();
+  const int i = m.nodes[k];
+  const D xi = load3(p + 3 * i);
+  D sum{};
+  for (int j : row) sum += load3(p + 3 * j) - xi;  // offsets, as the fit's: exact far out too
+  const D n = splat(double(row.size()));
+  const D pull = sum / n;
+  const D fi = splat(m.stiffness) * pull;
+  alignas(32) D row_of[1];
+  row_of[0] = -fi;
+  subtract3(forces + 3 * i, reinterpret_cast<const double*>(row_of));
+  if (m.reaction) {
+    row_of[0] = fi / n;
+    for (int j : row) subtract3(forces + 3 * j, reinterpret_cast<const double*>(row_of));
+  }
+  return 0.5 * m.stiffness * (pull[0] * pull[0] + pull[1] * pull[1] + pull[2] * pull[2]);
+}
+
+void plan_polar_batches(ShapeMemory& m, std::span<const Vec3> rest) {
   m.batch_order.clear();
   m.batched_end.clear();
+  m.centred_start.clear();
   if (m.frame != FrameMode::polar) {
     m.batch_order.shrink_to_fit();
     m.batched_end.shrink_to_fit();
+    m.centred_start.shrink_to_fit();
     return;
   }
   m.batch_order.reserve(m.nodes.size());
   m.batched_end.reserve(size_t(m.plan.blocks()));
-  std::vector<int> lanes, others;
+  m.centred_start.reserve(size_t(m.plan.blocks()));
+  std::vector<int> lanes, others, centred;
   // Lanes share their neighbour count and whether they carry the normal pair.
   auto count = [&m](int k) {
     return 2 * int(m.neighbours.row(k).size()) + (m.framed.find(k) >= 0 ? 1 : 0);
@@ -163,9 +204,10 @@ void plan_polar_batches(ShapeMemory& m) {
   for (int b = 0; b < m.plan.blocks(); ++b) {
     lanes.clear();
     others.clear();
+    centred.clear();
     for (int k = m.plan.block_start[b]; k < m.plan.block_start[b + 1]; ++k) {
       const bool batchable = int(m.neighbours.row(k).size()) <= kShapeMemoryMaxBatchedNeighbours;
-      (batchable ? lanes : others).push_back(k);
+      (is_centred(m, k, rest) ? centred : batchable ? lanes : others).push_back(k);
     }
     std::stable_sort(lanes.begin(), lanes.end(), [&](int a, int c) { return count(a) < count(c); });
     for (size_t s = 0; s < lanes.size();) {
@@ -180,6 +222,8 @@ void plan_polar_batches(ShapeMemory& m) {
     m.batched_end.push_back(int(m.batch_order.size()));
     std::sort(others.begin(), others.end());
     m.batch_order.insert(m.batch_order.end(), others.begin(), others.end());
+    m.centred_start.push_back(int(m.batch_order.size()));
+    m.batch_order.insert(m.batch_order.end(), centred.begin(), centred.end());
   }
 }
 

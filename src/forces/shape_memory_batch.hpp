@@ -15,9 +15,20 @@ inline constexpr int kShapeMemoryLanes = 4;
 // Neighbour counts above this go the scalar way (tetrahedral meshes reach about 20).
 inline constexpr int kShapeMemoryMaxBatchedNeighbours = 32;
 
-// Fills m.batch_order and m.batched_end from m.plan (polar mode; frame mode keeps them empty
-// and every node scalar).
-void plan_polar_batches(ShapeMemory& m);
+// Fills m.batch_order, m.batched_end and m.centred_start from m.plan and the rest positions
+// (polar mode; frame mode keeps them empty and every node scalar).
+void plan_polar_batches(ShapeMemory& m, std::span<const Vec3> rest);
+
+// A memory node whose rest position is its rest neighbours' centroid to round-off (64
+// machine epsilons of its longest rest offset): its pull is the current neighbours' centroid
+// less its position, whatever the rotation, so neither fit nor rotation is needed.
+bool is_centred(const ShapeMemory& m, int k, std::span<const Vec3> rest);
+
+// The pass of a centred memory node k: the pull K (g - x_i) and, with m.reaction, -f_i / n
+// on each neighbour (the exact reaction: the rotation's term vanishes with the rest offset).
+// Returns its energy; leaves its rotation as it is.
+double add_centred_node_forces(const ShapeMemory& m, int k, std::span<const Vec3> x,
+                               std::span<Vec3> f);
 
 // The scalar pass of memory node k: adds its forces (N) to f, returns its energy (J).
 double add_polar_node_forces(const ShapeMemory& m, int k, std::span<const Vec3> rest,

@@ -465,9 +465,9 @@ double add_polar_batch_pair_forces_single(const ShapeMemory& m, const int* ks,
 double add_shape_memory_forces_single(const ShapeMemory& m, std::span<const Vec3> rest,
                                       std::span<const Vec3> x,
                                       std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f) {
-  const bool planned = m.frame == FrameMode::polar &&
-                       int(m.batched_end.size()) == m.plan.blocks() &&
-                       m.batch_order.size() == m.nodes.size();
+  const bool planned =
+      m.frame == FrameMode::polar && int(m.batched_end.size()) == m.plan.blocks() &&
+      int(m.centred_start.size()) == m.plan.blocks() && m.batch_order.size() == m.nodes.size();
   if (!planned) return add_shape_memory_forces(m, rest, x, rotations, f);
   // Lanes share their neighbour count and whether they carry the normal pair (as
   // plan_polar_batches groups them).
@@ -476,7 +476,8 @@ double add_shape_memory_forces_single(const ShapeMemory& m, std::span<const Vec3
   };
   return run_coloured_blocks(m.plan, [&](int block) {
     double energy = 0.0;
-    const int batched = m.batched_end[block], end = m.plan.block_start[block + 1];
+    const int batched = m.batched_end[block], centred = m.centred_start[block],
+              end = m.plan.block_start[block + 1];
     int p = m.plan.block_start[block];
     // Two full batches of one kind side by side, their turns interleaved.
     while (p + 2 * W <= batched &&
@@ -491,8 +492,9 @@ double add_shape_memory_forces_single(const ShapeMemory& m, std::span<const Vec3
       energy += add_polar_batch_forces_single(m, ks, used, rest, x, rotations, f);
       p += used;
     }
-    for (; p < end; ++p)
+    for (; p < centred; ++p)
       energy += add_polar_node_forces(m, m.batch_order[size_t(p)], rest, x, rotations, f);
+    for (; p < end; ++p) energy += add_centred_node_forces(m, m.batch_order[size_t(p)], x, f);
     return energy;
   });
 }

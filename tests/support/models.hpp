@@ -33,6 +33,16 @@ inline Model single_component(const Mesh& mesh, const MaterialSpec& m) {
   return model;
 }
 
+// The mesh with every node moved by up to `fraction` of `spacing` along each axis (a fixed
+// seed): no node is its neighbours' centroid any more, so each takes the polar pass's fit and
+// rotation (forces/shape_memory_batch.hpp, is_centred), as an irregular mesh's nodes do.
+inline Mesh jittered(Mesh mesh, double spacing, double fraction = 0.05) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> offset(-fraction * spacing, fraction * spacing);
+  for (Vec3& p : mesh.points) p += Vec3(offset(rng), offset(rng), offset(rng));
+  return mesh;
+}
+
 inline Eigen::Matrix3d random_rotation(std::mt19937& rng) {
   std::normal_distribution<double> n(0.0, 1.0);
   Eigen::Quaterniond q(n(rng), n(rng), n(rng), n(rng));
