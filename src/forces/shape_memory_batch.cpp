@@ -160,27 +160,42 @@ bool is_centred(const ShapeMemory& m, int k, std::span<const Vec3> rest) {
          64.0 * std::numeric_limits<double>::epsilon() * longest;
 }
 
-double add_centred_node_forces(const ShapeMemory& m, int k, std::span<const Vec3> x,
-                               std::span<Vec3> f) {
+namespace {
+
+// N > 0: the loops unrolled for that neighbour count (a regular grid's 6); 0: any count.
+template <int N>
+double centred_node_forces(const ShapeMemory& m, int k, std::span<const Vec3> x,
+                           std::span<Vec3> f) {
   // A node's x, y, z in one register (lane 3 zero): a handful of instructions a neighbour.
   const auto row = m.neighbours.row(k);
+  const int* nb = row.data();
+  const int count = N > 0 ? N : int(row.size());
   const double* p = x.data()->data();
   double* forces = f.data()->data();
   const int i = m.nodes[k];
   const D xi = load3(p + 3 * i);
   D sum{};
-  for (int j : row) sum += load3(p + 3 * j) - xi;  // offsets, as the fit's: exact far out too
-  const D n = splat(double(row.size()));
+  for (int j = 0; j < count; ++j)
+    sum += load3(p + 3 * nb[j]) - xi;  // offsets, as the fit's: exact far out too
+  const D n = splat(double(count));
   const D pull = sum / n;
   const D fi = splat(m.stiffness) * pull;
-  alignas(32) D row_of[1];
-  row_of[0] = -fi;
+  D row_of[1] = {-fi};
   subtract3(forces + 3 * i, reinterpret_cast<const double*>(row_of));
   if (m.reaction) {
     row_of[0] = fi / n;
-    for (int j : row) subtract3(forces + 3 * j, reinterpret_cast<const double*>(row_of));
+    for (int j = 0; j < count; ++j)
+      subtract3(forces + 3 * nb[j], reinterpret_cast<const double*>(row_of));
   }
   return 0.5 * m.stiffness * (pull[0] * pull[0] + pull[1] * pull[1] + pull[2] * pull[2]);
+}
+
+}  // namespace
+
+double add_centred_node_forces(const ShapeMemory& m, int k, std::span<const Vec3> x,
+                               std::span<Vec3> f) {
+  return m.neighbours.row(k).size() == 6 ? centred_node_forces<6>(m, k, x, f)
+                                         : centred_node_forces<0>(m, k, x, f);
 }
 
 void plan_polar_batches(ShapeMemory& m, std::span<const Vec3> rest) {
