@@ -84,8 +84,9 @@ struct VolumeConstraint {
   // [incident_start[k], incident_start[k + 1]) of incident. Empty: the triangles' scatter.
   std::vector<int> incident_start;
   std::vector<std::array<int, 2>> incident;
-  // The joint velocity projection's 6 dV/dx per node of `nodes`, and the positions it was
-  // taken at: a step's last projection and the next step's first share them.
+  // The velocity projection's 6 dV/dx per node of `nodes` (the joint one's, or this
+  // surface's alone where it shares no node), and the positions it was taken at (NaN until
+  // then): a step's last projection and the next step's first share them.
   mutable std::vector<Vec3> coupled_gradient, coupled_at;
   // The nodes it shares with earlier constraints (finalize), where alone the joint
   // projection's products of two gradients are not zero: {l, local index here, local index

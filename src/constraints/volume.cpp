@@ -179,17 +179,37 @@ namespace {
 // One pass of the velocity projection on one constraint. Returns the removed rate dV/dt
 // relative to sum |g_i| |v_i|, for the sweeps' stopping test (0 without sweeps, which need no
 // square roots).
+// The gradient the last projection kept is still the one at x: every node where it was.
+bool kept_gradient_at(const VolumeConstraint& c, std::span<const Vec3> x) {
+  if (c.coupled_at.size() != c.nodes.size()) return false;
+  const int n = int(c.nodes.size());
+  for (int k = 0; k < n; ++k)  // a step's projection moves the first node already
+    if (c.coupled_at[size_t(k)] != x[size_t(c.nodes[size_t(k)])]) return false;
+  return true;
+}
+
 double remove_volume_rate(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
                           std::span<const Vec3> x, std::span<Vec3> v, std::span<Vec3> grad,
                           bool sweeps) {
-  const bool gather = gathered(c);  // the gradient in the sums' pass
-  if (!gather) scatter_volume_gradient(c, x, grad);
+  // The gradient in the sums' pass: kept from the last projection at these positions (the
+  // velocities' at a step's end, the accelerations' at the next one's start), or gathered
+  // from the faces and kept.
+  const bool kept = kept_gradient_at(c, x);
+  const bool gather = !kept && gathered(c);
+  const bool keep = gather && c.coupled_gradient.size() == c.nodes.size();
+  if (!kept && !gather) scatter_volume_gradient(c, x, grad);
   const FaceGather faces(c, x);
   const int n = int(c.nodes.size());
   // dV/dt, g.W.g and g.g-weighted |v|
   const auto [rate, weight, speed] = ordered_sums<3>(n, [&](int k, auto& sums) {
     const int i = c.nodes[size_t(k)];
-    if (gather) grad[i] = faces.six_gradient_at(k) / 6.0;
+    if (kept) {
+      grad[i] = c.coupled_gradient[size_t(k)] / 6.0;
+    } else if (gather) {
+      const Vec3 six = faces.six_gradient_at(k);
+      grad[i] = six / 6.0;
+      if (keep) c.coupled_gradient[size_t(k)] = six, c.coupled_at[size_t(k)] = x[size_t(i)];
+    }
     sums[0] += grad[i].dot(v[i]);
     sums[1] += grad[i].dot(grad[i].cwiseProduct(inverse_mass[i]));
     if (sweeps) sums[2] += grad[i].norm() * v[i].norm();

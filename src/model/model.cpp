@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "constraints/constraints.hpp"
@@ -56,8 +57,8 @@ void mark_coupled_volumes(Model& model) {
   for (const VolumeConstraint& c : model.volumes) {  // the joint projection's scratch
     const size_t size = model.coupled_volumes ? c.nodes.size() : 0;
     c.coupled_direction.assign(size, Vec3::Zero());
-    c.coupled_gradient.assign(size, Vec3::Zero());
-    c.coupled_at.assign(size, Vec3::Zero());
+    c.coupled_gradient.assign(c.nodes.size(), Vec3::Zero());
+    c.coupled_at.assign(c.nodes.size(), Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
   }
   model.coupled_factor.assign(
       model.coupled_volumes ? size_t(kMaxJointVolumes * kMaxJointVolumes) : 0, 0.0);
