@@ -48,6 +48,11 @@ struct ShapeMemory {
   std::vector<int> batch_order;
   std::vector<int> batched_end;
   std::vector<int> centred_start;
+  // Every centred node's neighbours at the same offsets of global id (a structured grid's
+  // interior): runs of consecutive centred nodes then go as a stencil over the coordinate
+  // arrays, whole vector registers at a time.
+  bool centred_on_stencil = false;
+  std::array<int, 6> centred_stencil{};
 };
 
 // Explicit finite elements of one component (TLED, Miller et al. 2007): total Lagrangian,

@@ -407,8 +407,7 @@ double add_polar_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::s
     }
     for (; p < centred; ++p)
       energy += add_polar_node_forces(m, m.batch_order[p], rest, x, rotations, f);
-    for (; p < end; ++p) energy += add_centred_node_forces(m, m.batch_order[p], x, f);
-    return energy;
+    return energy + add_centred_forces(m, m.batch_order.data() + p, end - p, x, f);
   });
 }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #if defined(__AVX__)
@@ -198,6 +199,79 @@ double add_centred_node_forces(const ShapeMemory& m, int k, std::span<const Vec3
                                          : centred_node_forces<0>(m, k, x, f);
 }
 
+namespace {
+
+// Centred nodes whose global ids run from first to first + count - 1, on the stencil: in
+// chunks of 64 nodes, the pulls, own forces and reactions of a whole chunk coordinate by
+// coordinate (x, y, z of node after node: the same offsets for all three).
+double stencil_run_forces(const ShapeMemory& m, int first, int count, std::span<const Vec3> x,
+                          std::span<Vec3> f) {
+  constexpr int kChunk = 64, kNeighbours = 6;
+  std::array<int, kNeighbours> offset;
+  for (int o = 0; o < kNeighbours; ++o) offset[size_t(o)] = 3 * m.centred_stencil[size_t(o)];
+  const double stiffness = m.stiffness;
+  double squares = 0.0;
+  for (int begin = 0; begin < count; begin += kChunk) {
+    const int elements = 3 * std::min(kChunk, count - begin);
+    const double* __restrict p = x.data()->data() + 3 * (first + begin);
+    double* __restrict forces = f.data()->data() + 3 * (first + begin);
+    double pull[3 * kChunk], share[3 * kChunk];
+    for (int e = 0; e < elements; ++e) {
+      double sum = 0.0;
+      for (int o = 0; o < kNeighbours; ++o) sum += p[e + offset[size_t(o)]] - p[e];
+      pull[e] = sum / double(kNeighbours);
+    }
+    for (int e = 0; e < elements; ++e) {
+      squares += pull[e] * pull[e];
+      const double fi = stiffness * pull[e];
+      forces[e] += fi;
+      share[e] = fi / double(kNeighbours);
+    }
+    if (!m.reaction) continue;
+    for (int o = 0; o < kNeighbours; ++o) {
+      double* __restrict to = forces + offset[size_t(o)];
+      for (int e = 0; e < elements; ++e) to[e] -= share[e];
+    }
+  }
+  return 0.5 * stiffness * squares;
+}
+
+}  // namespace
+
+double add_centred_forces(const ShapeMemory& m, const int* ks, int count, std::span<const Vec3> x,
+                          std::span<Vec3> f) {
+  double energy = 0.0;
+  if (!m.centred_on_stencil) {
+    for (int p = 0; p < count; ++p) energy += add_centred_node_forces(m, ks[p], x, f);
+    return energy;
+  }
+  for (int begin = 0; begin < count;) {
+    int end = begin + 1;
+    while (end < count && m.nodes[ks[end]] == m.nodes[ks[end - 1]] + 1) ++end;
+    energy += stencil_run_forces(m, m.nodes[ks[begin]], end - begin, x, f);
+    begin = end;
+  }
+  return energy;
+}
+
+// The offsets of global id at which every centred node finds its six neighbours, if they are
+// the same for all.
+std::optional<std::array<int, 6>> centred_stencil(const ShapeMemory& m,
+                                                  const std::vector<char>& centred) {
+  std::optional<std::array<int, 6>> stencil;
+  for (int k = 0; k < int(m.nodes.size()); ++k) {
+    if (!centred[size_t(k)]) continue;
+    const auto row = m.neighbours.row(k);
+    if (row.size() != 6) return std::nullopt;
+    std::array<int, 6> offsets;
+    for (int j = 0; j < 6; ++j) offsets[size_t(j)] = row[size_t(j)] - m.nodes[k];
+    std::sort(offsets.begin(), offsets.end());
+    if (stencil && *stencil != offsets) return std::nullopt;
+    stencil = offsets;
+  }
+  return stencil;
+}
+
 void plan_polar_batches(ShapeMemory& m, std::span<const Vec3> rest) {
   m.batch_order.clear();
   m.batched_end.clear();
@@ -206,12 +280,14 @@ void plan_polar_batches(ShapeMemory& m, std::span<const Vec3> rest) {
     m.batch_order.shrink_to_fit();
     m.batched_end.shrink_to_fit();
     m.centred_start.shrink_to_fit();
+    m.centred_on_stencil = false;
     return;
   }
   m.batch_order.reserve(m.nodes.size());
   m.batched_end.reserve(size_t(m.plan.blocks()));
   m.centred_start.reserve(size_t(m.plan.blocks()));
   std::vector<int> lanes, others, centred;
+  std::vector<char> is_centred_node(m.nodes.size(), 0);
   // Lanes share their neighbour count and whether they carry the normal pair.
   auto count = [&m](int k) {
     return 2 * int(m.neighbours.row(k).size()) + (m.framed.find(k) >= 0 ? 1 : 0);
@@ -239,7 +315,11 @@ void plan_polar_batches(ShapeMemory& m, std::span<const Vec3> rest) {
     m.batch_order.insert(m.batch_order.end(), others.begin(), others.end());
     m.centred_start.push_back(int(m.batch_order.size()));
     m.batch_order.insert(m.batch_order.end(), centred.begin(), centred.end());
+    for (int k : centred) is_centred_node[size_t(k)] = 1;
   }
+  const auto stencil = centred_stencil(m, is_centred_node);
+  m.centred_on_stencil = stencil.has_value();
+  m.centred_stencil = stencil.value_or(std::array<int, 6>{});
 }
 
 namespace {

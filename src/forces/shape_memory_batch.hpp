@@ -29,6 +29,11 @@ bool is_centred(const ShapeMemory& m, int k, std::span<const Vec3> rest);
 // Returns its energy; leaves its rotation as it is.
 double add_centred_node_forces(const ShapeMemory& m, int k, std::span<const Vec3> x,
                                std::span<Vec3> f);
+// The same for the centred memory nodes ks[0, count) of one block, in that order; runs of
+// consecutive global ids as a stencil (m.centred_on_stencil). The same forces up to their
+// order of summation.
+double add_centred_forces(const ShapeMemory& m, const int* ks, int count, std::span<const Vec3> x,
+                          std::span<Vec3> f);
 
 // The scalar pass of memory node k: adds its forces (N) to f, returns its energy (J).
 double add_polar_node_forces(const ShapeMemory& m, int k, std::span<const Vec3> rest,

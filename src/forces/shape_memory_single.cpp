@@ -494,8 +494,7 @@ double add_shape_memory_forces_single(const ShapeMemory& m, std::span<const Vec3
     }
     for (; p < centred; ++p)
       energy += add_polar_node_forces(m, m.batch_order[size_t(p)], rest, x, rotations, f);
-    for (; p < end; ++p) energy += add_centred_node_forces(m, m.batch_order[size_t(p)], x, f);
-    return energy;
+    return energy + add_centred_forces(m, m.batch_order.data() + p, end - p, x, f);
   });
 }
 

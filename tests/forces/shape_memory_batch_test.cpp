@@ -298,5 +298,32 @@ TEST(ShapeMemoryCentred, ZeroForceUnderARigidMotion) {
   EXPECT_LT(energy, 1e-28);
 }
 
+// A structured grid's centred nodes all find their neighbours at the same id offsets: their
+// runs go as a stencil over the coordinate arrays, with the node-by-node pass's forces up to
+// the order of their sums.
+TEST(ShapeMemoryCentred, StencilRunsGiveTheNodeByNodeForces) {
+  Model model = regular_block();
+  const ShapeMemory& m = model.shape_memory[0];
+  ASSERT_TRUE(m.centred_on_stencil);
+  const std::array<int, 6> expected{-49, -7, -1, 1, 7, 49};  // 7 x 7 x 7 nodes, x fastest
+  EXPECT_EQ(m.centred_stencil, expected);
+  std::mt19937 rng(23);
+  const Deformed d = deformed(model, rng);
+  std::vector<Vec3> f_stencil(d.x.size(), Vec3::Zero()), f_nodes = f_stencil;
+  std::vector<Eigen::Quaterniond> q_stencil = d.rotations, q_nodes = d.rotations;
+  const double e_stencil =
+      add_shape_memory_forces(m, model.rest_position, d.x, q_stencil, f_stencil);
+  model.shape_memory[0].centred_on_stencil = false;
+  const double e_nodes = add_shape_memory_forces(m, model.rest_position, d.x, q_nodes, f_nodes);
+  const double scale = largest(f_nodes);
+  double worst = 0.0;
+  for (size_t i = 0; i < d.x.size(); ++i)
+    worst = std::max(worst, (f_stencil[i] - f_nodes[i]).norm());
+  EXPECT_LE(worst, 1e-14 * scale);
+  EXPECT_NEAR(e_stencil, e_nodes, 1e-14 * e_nodes);
+  // An irregular grid's nodes are not centred; an icosphere's rings, none either: no stencil.
+  EXPECT_FALSE(block().shape_memory[0].centred_on_stencil);
+}
+
 }  // namespace
 }  // namespace phymul
