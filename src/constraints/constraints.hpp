@@ -31,8 +31,11 @@ double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_m
 
 // Every volume constraint at its target at load_time: one pass when the surfaces are
 // disjoint, Gauss-Seidel sweeps until all are within round-off when they share nodes.
+// start: within a step, the positions it began at; a disjoint surface whose velocity
+// projection kept its gradient there moves along that gradient (SHAKE's direction, which
+// saves a gradient pass) rather than along the one at x.
 void project_volumes(const Model& model, std::span<Vec3> x, double load_time,
-                     std::span<Vec3> scratch);
+                     std::span<Vec3> scratch, std::span<const Vec3> start = {});
 
 // All position constraints in the DESIGN's order: prescribed, rigid obstacles (contact.hpp),
 // then volumes (a few Gauss-Seidel sweeps when surfaces share nodes), then doubled nodes

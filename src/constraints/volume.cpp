@@ -86,6 +86,15 @@ void weighted_volume_gradient(const VolumeConstraint& c, std::span<const Vec3> i
   }
 }
 
+// The gradient the last projection kept is still the one at x: every node where it was.
+bool kept_gradient_at(const VolumeConstraint& c, std::span<const Vec3> x) {
+  if (c.coupled_at.size() != c.nodes.size()) return false;
+  const int n = int(c.nodes.size());
+  for (int k = 0; k < n; ++k)  // a step's projection moves the first node already
+    if (c.coupled_at[size_t(k)] != x[size_t(c.nodes[size_t(k)])]) return false;
+  return true;
+}
+
 }  // namespace
 
 void index_volume_faces(VolumeConstraint& c) {
@@ -127,10 +136,12 @@ double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_m
   return project_volume(c, inverse_mass, x, grad, c.target_volume);
 }
 
-double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
-                      std::span<Vec3> x, std::span<Vec3> grad, double target,
-                      double* relative_error_before) {
-  weighted_volume_gradient(c, inverse_mass, x, grad);  // direction d
+namespace {
+
+// The move along the direction d in grad (on c's nodes) that puts V at target: the root of
+// the cubic V(x + lambda d) nearest to zero. Returns lambda.
+double project_volume_along(const VolumeConstraint& c, std::span<Vec3> x, std::span<Vec3> grad,
+                            double target, double* relative_error_before) {
   const int n = int(c.nodes.size());
   const auto k = volume_cubic(c, x, grad);
   if (relative_error_before) *relative_error_before = std::abs(k[0] - target) / std::abs(target);
@@ -154,8 +165,29 @@ double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_m
   return lambda;
 }
 
+// d = w dV/dx into grad from the gradient the last velocity projection kept (the same
+// expression as weighted_volume_gradient's).
+void kept_direction(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
+                    std::span<Vec3> grad) {
+  const int n = int(c.nodes.size());
+#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
+  for (int k = 0; k < n; ++k) {
+    const int i = c.nodes[size_t(k)];
+    grad[i] = Vec3(c.coupled_gradient[size_t(k)] / 6.0).cwiseProduct(inverse_mass[i]);
+  }
+}
+
+}  // namespace
+
+double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
+                      std::span<Vec3> x, std::span<Vec3> grad, double target,
+                      double* relative_error_before) {
+  weighted_volume_gradient(c, inverse_mass, x, grad);  // direction d
+  return project_volume_along(c, x, grad, target, relative_error_before);
+}
+
 void project_volumes(const Model& model, std::span<Vec3> x, double load_time,
-                     std::span<Vec3> scratch) {
+                     std::span<Vec3> scratch, std::span<const Vec3> start) {
   // Surfaces sharing nodes: all multipliers at once (coupled_volume.hpp). Where that cannot
   // be used, each projection is exact for its own surface and they disturb each other, so
   // Gauss-Seidel sweeps go on until every volume was already at its target when its
@@ -167,7 +199,12 @@ void project_volumes(const Model& model, std::span<Vec3> x, double load_time,
     double worst = 0.0;
     for (const VolumeConstraint& c : model.volumes) {
       double before = 0.0;
-      project_volume(c, model.inverse_mass, x, scratch, c.target_at(load_time), &before);
+      if (!model.coupled_volumes && !start.empty() && kept_gradient_at(c, start)) {
+        kept_direction(c, model.inverse_mass, scratch);
+        project_volume_along(c, x, scratch, c.target_at(load_time), &before);
+      } else {
+        project_volume(c, model.inverse_mass, x, scratch, c.target_at(load_time), &before);
+      }
       worst = std::max(worst, before);
     }
     if (!model.coupled_volumes || worst <= kConverged) return;
@@ -179,14 +216,6 @@ namespace {
 // One pass of the velocity projection on one constraint. Returns the removed rate dV/dt
 // relative to sum |g_i| |v_i|, for the sweeps' stopping test (0 without sweeps, which need no
 // square roots).
-// The gradient the last projection kept is still the one at x: every node where it was.
-bool kept_gradient_at(const VolumeConstraint& c, std::span<const Vec3> x) {
-  if (c.coupled_at.size() != c.nodes.size()) return false;
-  const int n = int(c.nodes.size());
-  for (int k = 0; k < n; ++k)  // a step's projection moves the first node already
-    if (c.coupled_at[size_t(k)] != x[size_t(c.nodes[size_t(k)])]) return false;
-  return true;
-}
 
 double remove_volume_rate(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
                           std::span<const Vec3> x, std::span<Vec3> v, std::span<Vec3> grad,
