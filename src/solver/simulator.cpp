@@ -293,14 +293,14 @@ void Simulator::drift(double h) {
       double* __restrict a = flat(f_start_);
       const double *__restrict v = flat(s.v), *__restrict f = flat(s.f),
                    *__restrict w = flat(model_.inverse_mass);
-#pragma omp parallel for simd schedule(static) if (n >= kParallelFrom)
+#pragma omp parallel for simd schedule(static) if (parallel : n >= kParallelFrom)
       for (int e = 0; e < 3 * n; ++e) a[e] = acceleration(w[e], f[e], v[e], c);
     }
     if (!model_.volumes.empty()) project_volume_velocities(model_, s.x, f_start_, x_start_);
     project_doubled(model_, f_start_);
     double* __restrict x = flat(s.x), * __restrict x0 = flat(x_start_), * __restrict v0 = flat(v_start_);
     const double* __restrict v = flat(s.v), * __restrict a = flat(f_start_);
-#pragma omp parallel for simd schedule(static) if (n >= kParallelFrom)
+#pragma omp parallel for simd schedule(static) if (parallel : n >= kParallelFrom)
     for (int e = 0; e < 3 * n; ++e) {
       x0[e] = x[e];
       v0[e] = v[e];  // the last good state, if the step fails its checks
@@ -324,7 +324,7 @@ void Simulator::drift(double h) {
   {
     double* __restrict x = flat(s.x), * __restrict x0 = flat(x_start_), * __restrict v0 = flat(v_start_);
     const double* __restrict v = flat(s.v), * __restrict f = flat(s.f), * __restrict w = flat(model_.inverse_mass);
-#pragma omp parallel for simd schedule(static) if (n >= kParallelFrom)
+#pragma omp parallel for simd schedule(static) if (parallel : n >= kParallelFrom)
     for (int e = 0; e < 3 * n; ++e) {
       x0[e] = x[e];
       v0[e] = v[e];  // the last good state, if the step fails its checks
@@ -353,7 +353,7 @@ void Simulator::half_kick_from_positions(double h) {
     double* __restrict v = flat(s.v);
     const double *__restrict x = flat(s.x), *__restrict x0 = flat(x_start_),
                  *__restrict f = flat(s.f), *__restrict w = flat(model_.inverse_mass);
-#pragma omp parallel for simd schedule(static) if (n >= kParallelFrom)
+#pragma omp parallel for simd schedule(static) if (parallel : n >= kParallelFrom)
     for (int e = 0; e < 3 * n; ++e) {
       const double moved = (x[e] - x0[e]) / h;
       v[e] = mul_add(0.5 * h, acceleration(w[e], f[e], moved, c), moved);
@@ -461,7 +461,7 @@ void Simulator::check_stability() const {
   double largest_coordinate_step2 = 0.0;
   int doubtful = 0;
   // clang-format off
-#pragma omp parallel for simd schedule(static) if (n >= kParallelFrom) \
+#pragma omp parallel for simd schedule(static) if (parallel : n >= kParallelFrom) \
     reduction(| : doubtful) reduction(max : largest_coordinate_step2)
   // clang-format on
   for (int e = 0; e < 3 * n; ++e) {
