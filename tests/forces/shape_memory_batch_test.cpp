@@ -89,16 +89,28 @@ TEST(ShapeMemoryBatch, PlanBatchesEqualCountsAndNormalPairs) {
   EXPECT_GE(corners, 4);  // a batch of corners at least (a block leaves up to 3 over)
 }
 
+// The whole pass and every node on the scalar path, from the same deformed state.
+struct PassAndScalar {
+  std::vector<Vec3> f_scalar, f_pass;
+  std::vector<Eigen::Quaterniond> q_scalar, q_pass;
+  double e_scalar = 0.0, e_pass = 0.0;
+};
+
+PassAndScalar pass_and_scalar(const Model& model, const Deformed& d) {
+  const ShapeMemory& m = model.shape_memory[0];
+  PassAndScalar r{std::vector<Vec3>(d.x.size(), Vec3::Zero()),
+                  std::vector<Vec3>(d.x.size(), Vec3::Zero()), d.rotations, d.rotations};
+  for (int k = 0; k < int(m.nodes.size()); ++k)
+    r.e_scalar += add_polar_node_forces(m, k, model.rest_position, d.x, r.q_scalar, r.f_scalar);
+  r.e_pass = add_shape_memory_forces(m, model.rest_position, d.x, r.q_pass, r.f_pass);
+  return r;
+}
+
 // The whole batched pass against every node on the scalar path; both kinds of lanes occur.
 void expect_agreement(const Model& model, std::mt19937& rng) {
   const ShapeMemory& m = model.shape_memory[0];
   const Deformed d = deformed(model, rng);
-  std::vector<Vec3> f_scalar(d.x.size(), Vec3::Zero()), f_batch = f_scalar;
-  std::vector<Eigen::Quaterniond> q_scalar = d.rotations, q_batch = d.rotations;
-  double e_scalar = 0.0;
-  for (int k = 0; k < int(m.nodes.size()); ++k)
-    e_scalar += add_polar_node_forces(m, k, model.rest_position, d.x, q_scalar, f_scalar);
-  const double e_batch = add_shape_memory_forces(m, model.rest_position, d.x, q_batch, f_batch);
+  const auto [f_scalar, f_batch, q_scalar, q_batch, e_scalar, e_batch] = pass_and_scalar(model, d);
   const double scale = largest(f_scalar);
   ASSERT_GT(scale, 1e-3);  // N: a real deformation
   for (size_t i = 0; i < d.x.size(); ++i)
@@ -260,12 +272,7 @@ TEST(ShapeMemoryCentred, PassAgreesWithTheScalarPath) {
   std::mt19937 rng(17);
   for (int trial = 0; trial < 3; ++trial) {
     const Deformed d = deformed(model, rng);
-    std::vector<Vec3> f_scalar(d.x.size(), Vec3::Zero()), f_pass = f_scalar;
-    std::vector<Eigen::Quaterniond> q_scalar = d.rotations, q_pass = d.rotations;
-    double e_scalar = 0.0;
-    for (int k = 0; k < int(m.nodes.size()); ++k)
-      e_scalar += add_polar_node_forces(m, k, model.rest_position, d.x, q_scalar, f_scalar);
-    const double e_pass = add_shape_memory_forces(m, model.rest_position, d.x, q_pass, f_pass);
+    const auto [f_scalar, f_pass, q_scalar, q_pass, e_scalar, e_pass] = pass_and_scalar(model, d);
     const double h = 0.005, bound = 2.0 * 7.0 * 50.0 * 64.0 * 2.2204460492503131e-16 * h;
     double worst = 0.0;
     for (size_t i = 0; i < d.x.size(); ++i)
