@@ -3,16 +3,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-// The joint projection's loops over a surface's triangles and nodes take a node's three
-// coordinates in one AVX2 register where the build targets it (-march=native), and plain
-// Eigen otherwise: the same sums, in another order (results differ in the last bits).
-#if defined(__AVX2__) && defined(__FMA__)
-#define PHYMUL_VOLUME_AVX2 1
-#include <immintrin.h>
-#endif
 #include <vector>
 
 #include "constraints/volume_gather.hpp"
+#include "constraints/volume_lanes.hpp"
 
 namespace phymul {
 namespace {
@@ -59,27 +53,6 @@ double six_gradient(const Model& model, const VolumeConstraint& c, std::span<con
 }
 
 #ifdef PHYMUL_VOLUME_AVX2
-// Three doubles in the lanes 0-2 of a register, 0 in the fourth; never read or written past.
-[[gnu::always_inline]] inline __m256i three_lanes() { return _mm256_setr_epi64x(-1, -1, -1, 0); }
-[[gnu::always_inline]] inline __m256d load3(const Vec3& v) {
-  return _mm256_maskload_pd(v.data(), three_lanes());
-}
-[[gnu::always_inline]] inline void store3(Vec3& v, __m256d r) {
-  _mm256_maskstore_pd(v.data(), three_lanes(), r);
-}
-// (y, z, x, w): the cross product a x b is a * yzx(b) - yzx(a) * b in the lanes (z, x, y).
-[[gnu::always_inline]] inline __m256d yzx(__m256d v) {
-  return _mm256_permute4x64_pd(v, _MM_SHUFFLE(3, 0, 2, 1));
-}
-[[gnu::always_inline]] inline __m256d zxy(__m256d v) {
-  return _mm256_permute4x64_pd(v, _MM_SHUFFLE(3, 1, 0, 2));
-}
-[[gnu::always_inline]] inline double lane_sum(__m256d v) {
-  alignas(32) double l[4];
-  _mm256_store_pd(l, v);
-  return (l[0] + l[1]) + (l[2] + l[3]);
-}
-
 // 6 dV/dx of c summed at its nodes in the scratch, in the rotated lanes (z, x, y); returns
 // 6 V. A triangle's three cross products take one register each: about half the
 // instructions of the scalar scatter, no spills. The scratch has the positions' layout (one
