@@ -233,25 +233,8 @@ void linearise(const Model& model, std::span<const Vec3> x, std::span<Vec3> grad
 // positions of the last one's, whatever was computed in between: a monitor's residual).
 bool kept_linearisation_at(const Model& model, std::span<const Vec3> x) {
   if (!model.coupled_factor_valid) return false;
-  for (const VolumeConstraint& c : model.volumes) {
-    const int* __restrict nodes = c.nodes.data();
-    const Vec3* __restrict at = c.coupled_at.data();
-    const int n = int(c.nodes.size());
-#ifdef PHYMUL_VOLUME_AVX2
-    // Branch-free within blocks of 32 nodes: after a step's projection the first block
-    // already differs, between steps every node is compared.
-    for (int begin = 0; begin < n; begin += 32) {
-      __m256d differ = _mm256_setzero_pd();
-      for (int m = begin; m < std::min(n, begin + 32); ++m)
-        differ = _mm256_or_pd(differ,
-                              _mm256_cmp_pd(load3(at[m]), load3(x[size_t(nodes[m])]), _CMP_NEQ_UQ));
-      if (!_mm256_testz_pd(differ, differ)) return false;
-    }
-#else
-    for (int m = 0; m < n; ++m)
-      if (at[m] != x[size_t(nodes[m])]) return false;
-#endif
-  }
+  for (const VolumeConstraint& c : model.volumes)
+    if (!gradient_kept_at(c, x)) return false;
   return true;
 }
 

@@ -18,24 +18,30 @@ namespace {
 // Per-node and per-triangle loops of a large surface run in parallel from this many items.
 constexpr int kParallelFrom = 2048;
 
-// The N sums of add(k, sums) over k in [0, n), taken in a fixed number of contiguous chunks
-// whose partial sums are added in chunk order: the same bits whatever the number of threads.
-template <size_t N, class Add>
-std::array<double, N> ordered_sums(int n, Add&& add) {
+// N sums over [0, n), taken in a fixed number of contiguous chunks (chunk(begin, end) sums
+// one) whose partial sums are added in chunk order: the same bits whatever the number of
+// threads.
+template <size_t N, class Chunk>
+std::array<double, N> chunked_sums(int n, Chunk&& chunk) {
   constexpr int kChunks = 16;
   std::array<std::array<double, N>, kChunks> part{};
 #pragma omp parallel for schedule(static) if (n >= kParallelFrom)
-  for (int chunk = 0; chunk < kChunks; ++chunk) {
-    const int begin = int(int64_t(n) * chunk / kChunks);
-    const int end = int(int64_t(n) * (chunk + 1) / kChunks);
-    std::array<double, N> sums{};
-    for (int k = begin; k < end; ++k) add(k, sums);
-    part[size_t(chunk)] = sums;
-  }
+  for (int c = 0; c < kChunks; ++c)
+    part[size_t(c)] = chunk(int(int64_t(n) * c / kChunks), int(int64_t(n) * (c + 1) / kChunks));
   std::array<double, N> total{};
   for (const std::array<double, N>& p : part)
     for (size_t a = 0; a < N; ++a) total[a] += p[a];
   return total;
+}
+
+// The N sums of add(k, sums) over k in [0, n), in chunked_sums' order.
+template <size_t N, class Add>
+std::array<double, N> ordered_sums(int n, Add&& add) {
+  return chunked_sums<N>(n, [&](int begin, int end) {
+    std::array<double, N> sums{};
+    for (int k = begin; k < end; ++k) add(k, sums);
+    return sums;
+  });
 }
 
 // Coefficients of V(x + lambda d) = c0 + c1 l + c2 l^2 + c3 l^3, exact for a triangulated
@@ -45,15 +51,8 @@ std::array<double, 4> volume_cubic(const VolumeConstraint& c, std::span<const Ve
 #ifdef PHYMUL_VOLUME_AVX2
   // A triangle's vectors in one register each, its cross products in the rotated lanes
   // (z, x, y) and the products with the third corner summed lane by lane: a third of the
-  // scalar instructions. Each chunk's lanes are added in one order: the same bits whatever
-  // the thread count.
-  constexpr int kChunks = 16;
-  const int count = int(c.triangles.size());
-  std::array<std::array<double, 4>, kChunks> part{};
-#pragma omp parallel for schedule(static) if (count >= kParallelFrom)
-  for (int chunk = 0; chunk < kChunks; ++chunk) {
-    const int begin = int(int64_t(count) * chunk / kChunks);
-    const int end = int(int64_t(count) * (chunk + 1) / kChunks);
+  // scalar instructions.
+  std::array<double, 4> k = chunked_sums<4>(int(c.triangles.size()), [&](int begin, int end) {
     __m256d s0 = _mm256_setzero_pd(), s1 = s0, s2 = s0, s3 = s0;
     auto cross = [](__m256d a, __m256d b) {  // a x b in the lanes (z, x, y)
       return _mm256_fmsub_pd(a, yzx(b), _mm256_mul_pd(yzx(a), b));
@@ -69,11 +68,8 @@ std::array<double, 4> volume_cubic(const VolumeConstraint& c, std::span<const Ve
       s2 = _mm256_fmadd_pd(xa, dbc, _mm256_fmadd_pd(da, mixed, s2));
       s3 = _mm256_fmadd_pd(da, dbc, s3);
     }
-    part[size_t(chunk)] = {lane_sum(s0), lane_sum(s1), lane_sum(s2), lane_sum(s3)};
-  }
-  std::array<double, 4> k{};
-  for (const std::array<double, 4>& p : part)
-    for (size_t a = 0; a < 4; ++a) k[a] += p[a];
+    return std::array<double, 4>{lane_sum(s0), lane_sum(s1), lane_sum(s2), lane_sum(s3)};
+  });
 #else
   std::array<double, 4> k = ordered_sums<4>(int(c.triangles.size()), [&](int n, auto& sums) {
     const Triangle& t = c.triangles[size_t(n)];
@@ -119,15 +115,6 @@ void weighted_volume_gradient(const VolumeConstraint& c, std::span<const Vec3> i
     const Vec3 g = gather ? Vec3(faces.six_gradient_at(k) / 6.0) : out[i];
     out[i] = g.cwiseProduct(inverse_mass[i]);
   }
-}
-
-// The gradient the last projection kept is still the one at x: every node where it was.
-bool kept_gradient_at(const VolumeConstraint& c, std::span<const Vec3> x) {
-  if (c.coupled_at.size() != c.nodes.size()) return false;
-  const int n = int(c.nodes.size());
-  for (int k = 0; k < n; ++k)  // a step's projection moves the first node already
-    if (c.coupled_at[size_t(k)] != x[size_t(c.nodes[size_t(k)])]) return false;
-  return true;
 }
 
 }  // namespace
@@ -234,7 +221,7 @@ void project_volumes(const Model& model, std::span<Vec3> x, double load_time,
     double worst = 0.0;
     for (const VolumeConstraint& c : model.volumes) {
       double before = 0.0;
-      if (!model.coupled_volumes && !start.empty() && kept_gradient_at(c, start)) {
+      if (!model.coupled_volumes && !start.empty() && gradient_kept_at(c, start)) {
         kept_direction(c, model.inverse_mass, scratch);
         project_volume_along(c, x, scratch, c.target_at(load_time), &before);
       } else {
@@ -251,14 +238,13 @@ namespace {
 // One pass of the velocity projection on one constraint. Returns the removed rate dV/dt
 // relative to sum |g_i| |v_i|, for the sweeps' stopping test (0 without sweeps, which need no
 // square roots).
-
 double remove_volume_rate(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
                           std::span<const Vec3> x, std::span<Vec3> v, std::span<Vec3> grad,
                           bool sweeps) {
   // The gradient in the sums' pass: kept from the last projection at these positions (the
   // velocities' at a step's end, the accelerations' at the next one's start), or gathered
   // from the faces and kept.
-  const bool kept = kept_gradient_at(c, x);
+  const bool kept = gradient_kept_at(c, x);
   const bool gather = !kept && gathered(c);
   const bool keep = gather && c.coupled_gradient.size() == c.nodes.size();
   if (!kept && !gather) scatter_volume_gradient(c, x, grad);

@@ -8,6 +8,9 @@
 #include <immintrin.h>
 #endif
 
+#include <algorithm>
+#include <span>
+
 #include "phymul/model.hpp"
 
 namespace phymul {
@@ -34,5 +37,28 @@ namespace phymul {
   return (l[0] + l[1]) + (l[2] + l[3]);
 }
 #endif
+
+// Whether c's kept velocity-projection gradient (coupled_gradient) was taken at x: every node
+// of c where coupled_at says. Branch-free within blocks of 32 nodes: after a step's
+// projection the first block already differs, between steps every node is compared.
+inline bool gradient_kept_at(const VolumeConstraint& c, std::span<const Vec3> x) {
+  if (c.coupled_at.size() != c.nodes.size()) return false;
+  const int* __restrict nodes = c.nodes.data();
+  const Vec3* __restrict at = c.coupled_at.data();
+  const int n = int(c.nodes.size());
+#ifdef PHYMUL_VOLUME_AVX2
+  for (int begin = 0; begin < n; begin += 32) {
+    __m256d differ = _mm256_setzero_pd();
+    for (int m = begin; m < std::min(n, begin + 32); ++m)
+      differ = _mm256_or_pd(differ,
+                            _mm256_cmp_pd(load3(at[m]), load3(x[size_t(nodes[m])]), _CMP_NEQ_UQ));
+    if (!_mm256_testz_pd(differ, differ)) return false;
+  }
+#else
+  for (int m = 0; m < n; ++m)
+    if (at[m] != x[size_t(nodes[m])]) return false;
+#endif
+  return true;
+}
 
 }  // namespace phymul

@@ -387,10 +387,7 @@ namespace {
 double add_polar_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::span<const Vec3> x,
                         std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f) {
   // A memory whose plan changed after plan_polar_batches runs scalar, in node order.
-  const bool planned = int(m.batched_end.size()) == m.plan.blocks() &&
-                       int(m.centred_start.size()) == m.plan.blocks() &&
-                       m.batch_order.size() == m.nodes.size();
-  if (!planned)
+  if (!polar_batches_planned(m))
     return run_coloured(m.plan,
                         [&](int k) { return add_polar_node_forces(m, k, rest, x, rotations, f); });
   return run_coloured_blocks(m.plan, [&](int b) {

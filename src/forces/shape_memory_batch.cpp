@@ -273,22 +273,31 @@ double add_centred_forces(const ShapeMemory& m, const int* ks, int count, std::s
   return energy;
 }
 
-// The offsets of global id at which every centred node finds its six neighbours, if they are
-// the same for all.
-std::optional<std::array<int, 6>> centred_stencil(const ShapeMemory& m,
-                                                  const std::vector<char>& centred) {
+namespace {
+
+// The offsets of global id at which every centred node (m's centred ranges) finds its six
+// neighbours, if they are the same for all.
+std::optional<std::array<int, 6>> centred_stencil(const ShapeMemory& m) {
   std::optional<std::array<int, 6>> stencil;
-  for (int k = 0; k < int(m.nodes.size()); ++k) {
-    if (!centred[size_t(k)]) continue;
-    const auto row = m.neighbours.row(k);
-    if (row.size() != 6) return std::nullopt;
-    std::array<int, 6> offsets;
-    for (int j = 0; j < 6; ++j) offsets[size_t(j)] = row[size_t(j)] - m.nodes[k];
-    std::sort(offsets.begin(), offsets.end());
-    if (stencil && *stencil != offsets) return std::nullopt;
-    stencil = offsets;
-  }
+  for (int b = 0; b < m.plan.blocks(); ++b)
+    for (int p = m.centred_start[b]; p < m.plan.block_start[b + 1]; ++p) {
+      const int k = m.batch_order[size_t(p)];
+      const auto row = m.neighbours.row(k);
+      if (row.size() != 6) return std::nullopt;
+      std::array<int, 6> offsets;
+      for (int j = 0; j < 6; ++j) offsets[size_t(j)] = row[size_t(j)] - m.nodes[k];
+      std::sort(offsets.begin(), offsets.end());
+      if (stencil && *stencil != offsets) return std::nullopt;
+      stencil = offsets;
+    }
   return stencil;
+}
+
+}  // namespace
+
+bool polar_batches_planned(const ShapeMemory& m) {
+  return int(m.batched_end.size()) == m.plan.blocks() &&
+         int(m.centred_start.size()) == m.plan.blocks() && m.batch_order.size() == m.nodes.size();
 }
 
 void plan_polar_batches(ShapeMemory& m, std::span<const Vec3> rest) {
@@ -306,7 +315,6 @@ void plan_polar_batches(ShapeMemory& m, std::span<const Vec3> rest) {
   m.batched_end.reserve(size_t(m.plan.blocks()));
   m.centred_start.reserve(size_t(m.plan.blocks()));
   std::vector<int> lanes, others, centred;
-  std::vector<char> is_centred_node(m.nodes.size(), 0);
   // Lanes share their neighbour count and whether they carry the normal pair.
   auto count = [&m](int k) {
     return 2 * int(m.neighbours.row(k).size()) + (m.framed.find(k) >= 0 ? 1 : 0);
@@ -334,9 +342,8 @@ void plan_polar_batches(ShapeMemory& m, std::span<const Vec3> rest) {
     m.batch_order.insert(m.batch_order.end(), others.begin(), others.end());
     m.centred_start.push_back(int(m.batch_order.size()));
     m.batch_order.insert(m.batch_order.end(), centred.begin(), centred.end());
-    for (int k : centred) is_centred_node[size_t(k)] = 1;
   }
-  const auto stencil = centred_stencil(m, is_centred_node);
+  const auto stencil = centred_stencil(m);
   m.centred_on_stencil = stencil.has_value();
   m.centred_stencil = stencil.value_or(std::array<int, 6>{});
 }

@@ -18,6 +18,9 @@ inline constexpr int kShapeMemoryMaxBatchedNeighbours = 32;
 // Fills m.batch_order, m.batched_end and m.centred_start from m.plan and the rest positions
 // (polar mode; frame mode keeps them empty and every node scalar).
 void plan_polar_batches(ShapeMemory& m, std::span<const Vec3> rest);
+// Whether m's batch plan still matches its parallel plan (else its nodes go the scalar way,
+// in node order).
+bool polar_batches_planned(const ShapeMemory& m);
 
 // A memory node whose rest position is its rest neighbours' centroid to round-off (64
 // machine epsilons of its longest rest offset): its pull is the current neighbours' centroid

@@ -465,10 +465,8 @@ double add_polar_batch_pair_forces_single(const ShapeMemory& m, const int* ks,
 double add_shape_memory_forces_single(const ShapeMemory& m, std::span<const Vec3> rest,
                                       std::span<const Vec3> x,
                                       std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f) {
-  const bool planned =
-      m.frame == FrameMode::polar && int(m.batched_end.size()) == m.plan.blocks() &&
-      int(m.centred_start.size()) == m.plan.blocks() && m.batch_order.size() == m.nodes.size();
-  if (!planned) return add_shape_memory_forces(m, rest, x, rotations, f);
+  if (m.frame != FrameMode::polar || !polar_batches_planned(m))
+    return add_shape_memory_forces(m, rest, x, rotations, f);
   // Lanes share their neighbour count and whether they carry the normal pair (as
   // plan_polar_batches groups them).
   auto kind = [&m](int k) {

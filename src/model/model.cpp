@@ -54,7 +54,8 @@ void mark_coupled_volumes(Model& model) {
       if (seen[size_t(i)]) model.coupled_volumes = true;
       seen[size_t(i)] = 1;
     }
-  for (const VolumeConstraint& c : model.volumes) {  // the joint projection's scratch
+  // The joint projection's scratch; every surface's kept velocity-projection gradient.
+  for (const VolumeConstraint& c : model.volumes) {
     const size_t size = model.coupled_volumes ? c.nodes.size() : 0;
     c.coupled_direction.assign(size, Vec3::Zero());
     c.coupled_gradient.assign(c.nodes.size(), Vec3::Zero());

@@ -30,9 +30,6 @@ Vec3 free_axes(const Vec3& inverse_mass) {
   return (inverse_mass.array() > 0.0).cast<double>().matrix();
 }
 
-// W f - c v, the damping on the free axes only.
-// (A select rather than free_axes' product by 0 or 1: the same numbers but for the sign of a
-// zero on a held axis, in a few instructions instead of conversions.)
 // a b + c, rounded once where the target has fused multiply-adds: spelled out, so that a
 // loop's vector body and its scalar remainder round alike (GCC contracts each expression as
 // it sees fit, and the thread count moves the remainders' bounds).
@@ -44,6 +41,9 @@ Vec3 free_axes(const Vec3& inverse_mass) {
 #endif
 }
 
+// W f - c v, the damping on the free axes only.
+// (A select rather than free_axes' product by 0 or 1: the same numbers but for the sign of a
+// zero on a held axis, in a few instructions instead of conversions.)
 [[gnu::always_inline]] inline double acceleration(double inverse_mass, double f, double v,
                                                   double c) {
   return mul_add(inverse_mass, f, -(c * (inverse_mass > 0.0 ? v : 0.0)));
