@@ -7,6 +7,8 @@
 #include <functional>
 #include <vector>
 
+#include "phymul/thread_team.hpp"
+
 namespace phymul {
 
 struct ParallelPlan {
@@ -28,13 +30,18 @@ template <class BlockWork>
 double run_coloured_blocks(const ParallelPlan& plan, BlockWork&& block_work) {
   constexpr int kParallelFrom = 2048;  // items; below, a thread team costs more than it saves
   const int colours = int(plan.colour_start.size()) - 1;
-#pragma omp parallel if (plan.block_start.back() >= kParallelFrom)
-  for (int c = 0; c < colours; ++c) {
+  auto run = [&](int index) {
+    const int b = plan.colour_blocks[index];
+    plan.block_energy[b] = block_work(b);
+  };
+  if (team_pays(plan.block_start.back(), kParallelFrom)) {
+#pragma omp parallel
+    for (int c = 0; c < colours; ++c) {
 #pragma omp for schedule(static)
-    for (int index = plan.colour_start[c]; index < plan.colour_start[c + 1]; ++index) {
-      const int b = plan.colour_blocks[index];
-      plan.block_energy[b] = block_work(b);
+      for (int index = plan.colour_start[c]; index < plan.colour_start[c + 1]; ++index) run(index);
     }
+  } else {
+    for (int index = 0; index < plan.colour_start.back(); ++index) run(index);
   }
   double energy = 0.0;
   for (double e : plan.block_energy) energy += e;

@@ -11,6 +11,7 @@
 #include "constraints/coupled_volume.hpp"
 #include "constraints/volume_gather.hpp"
 #include "constraints/volume_lanes.hpp"
+#include "phymul/thread_team.hpp"
 
 namespace phymul {
 namespace {
@@ -25,9 +26,9 @@ template <size_t N, class Chunk>
 std::array<double, N> chunked_sums(int n, Chunk&& chunk) {
   constexpr int kChunks = 16;
   std::array<std::array<double, N>, kChunks> part{};
-#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
-  for (int c = 0; c < kChunks; ++c)
+  for_each_index(kChunks, team_pays(n, kParallelFrom), [&](int c) {
     part[size_t(c)] = chunk(int(int64_t(n) * c / kChunks), int(int64_t(n) * (c + 1) / kChunks));
+  });
   std::array<double, N> total{};
   for (const std::array<double, N>& p : part)
     for (size_t a = 0; a < N; ++a) total[a] += p[a];
@@ -109,12 +110,11 @@ void weighted_volume_gradient(const VolumeConstraint& c, std::span<const Vec3> i
   const FaceGather faces(c, x);
   const int* __restrict nodes = c.nodes.data();
   Vec3* __restrict out = grad.data();
-#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
-  for (int k = 0; k < n; ++k) {
+  for_each_index(n, team_pays(n, kParallelFrom), [&](int k) {
     const int i = nodes[k];
     const Vec3 g = gather ? Vec3(faces.six_gradient_at(k) / 6.0) : out[i];
     out[i] = g.cwiseProduct(inverse_mass[i]);
-  }
+  });
 }
 
 }  // namespace
@@ -149,8 +149,9 @@ void volume_gradient(const VolumeConstraint& c, std::span<const Vec3> x, std::sp
   // triangles): 9 divisions per triangle saved; rounded once, the sum is as accurate.
   if (!gathered(c)) return scatter_volume_gradient(c, x, grad);
   const int n = int(c.nodes.size());
-#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
-  for (int k = 0; k < n; ++k) grad[c.nodes[size_t(k)]] = FaceGather(c, x).six_gradient_at(k) / 6.0;
+  for_each_index(n, team_pays(n, kParallelFrom), [&](int k) {
+    grad[c.nodes[size_t(k)]] = FaceGather(c, x).six_gradient_at(k) / 6.0;
+  });
 }
 
 double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
@@ -182,8 +183,8 @@ double project_volume_along(const VolumeConstraint& c, std::span<Vec3> x, std::s
     lambda -= step;
     if (std::abs(step) <= 1e-16 * std::abs(lambda)) break;
   }
-#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
-  for (int k = 0; k < n; ++k) x[c.nodes[size_t(k)]] += lambda * grad[c.nodes[size_t(k)]];
+  for_each_index(n, team_pays(n, kParallelFrom),
+                 [&](int k) { x[c.nodes[size_t(k)]] += lambda * grad[c.nodes[size_t(k)]]; });
   return lambda;
 }
 
@@ -192,11 +193,10 @@ double project_volume_along(const VolumeConstraint& c, std::span<Vec3> x, std::s
 void kept_direction(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
                     std::span<Vec3> grad) {
   const int n = int(c.nodes.size());
-#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
-  for (int k = 0; k < n; ++k) {
+  for_each_index(n, team_pays(n, kParallelFrom), [&](int k) {
     const int i = c.nodes[size_t(k)];
     grad[i] = Vec3(c.coupled_gradient[size_t(k)] / 6.0).cwiseProduct(inverse_mass[i]);
-  }
+  });
 }
 
 }  // namespace
@@ -266,11 +266,10 @@ double remove_volume_rate(const VolumeConstraint& c, std::span<const Vec3> inver
   });
   if (weight == 0.0) return 0.0;
   const double mu = rate / weight;
-#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
-  for (int k = 0; k < n; ++k) {
+  for_each_index(n, team_pays(n, kParallelFrom), [&](int k) {
     const int i = c.nodes[size_t(k)];
     v[i] -= mu * grad[i].cwiseProduct(inverse_mass[i]);
-  }
+  });
   return speed > 0.0 ? std::abs(rate) / speed : 0.0;
 }
 

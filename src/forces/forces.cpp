@@ -4,6 +4,7 @@
 #include "forces/explicit_fem.hpp"
 #include "forces/pressure.hpp"
 #include "forces/shape_memory.hpp"
+#include "phymul/thread_team.hpp"
 
 namespace phymul {
 
@@ -14,12 +15,11 @@ void compute_forces(const Model& model, State& s, double load_time) {
     double* __restrict f = s.f.data()->data();
     const double* __restrict mass = model.mass.data();
     const double gx = model.gravity.x(), gy = model.gravity.y(), gz = model.gravity.z();
-#pragma omp parallel for simd schedule(static) if (parallel : n >= 4096)
-    for (int i = 0; i < n; ++i) {
+    for_each_lane(n, team_pays(n, 4096), [=](int i) {
       f[3 * i] = mass[i] * gx;
       f[3 * i + 1] = mass[i] * gy;
       f[3 * i + 2] = mass[i] * gz;
-    }
+    });
   }
   for (const AppliedForce& load : model.forces) {
     const Vec3 fi = load.force.at(load_time);

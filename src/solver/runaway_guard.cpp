@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "phymul/thread_team.hpp"
+
 namespace phymul {
 
 std::vector<double> runaway_edges(const Model& model) {
@@ -60,13 +62,18 @@ bool surely_no_runaway(std::span<const double> edges, std::span<const Vec3> befo
   const int n = int(after.size());
   double largest = 0.0, shortest = std::numeric_limits<double>::infinity();
   bool finite = true;
-#pragma omp parallel for schedule(static) if (n >= 4096) \
-    reduction(max : largest) reduction(min : shortest) reduction(&& : finite)
-  for (int i = 0; i < n; ++i) {
+  auto look = [&](int i, double& most, double& least, bool& all_finite) {
     const double step2 = (after[i] - before[i]).squaredNorm();
-    finite = finite && std::isfinite(step2);
-    largest = std::max(largest, step2);
-    shortest = std::min(shortest, edges[i]);
+    all_finite = all_finite && std::isfinite(step2);
+    most = std::max(most, step2);
+    least = std::min(least, edges[i]);
+  };
+  if (team_pays(n, 4096)) {
+#pragma omp parallel for schedule(static) reduction(max : largest) reduction(min : shortest) \
+    reduction(&& : finite)
+    for (int i = 0; i < n; ++i) look(i, largest, shortest, finite);
+  } else {
+    for (int i = 0; i < n; ++i) look(i, largest, shortest, finite);
   }
   return finite && steps_surely_within_bound(largest, shortest);
 }
@@ -83,11 +90,16 @@ std::optional<Runaway> find_runaway(const Model& model, std::span<const double> 
   for (const ShapeMemory& m : model.shape_memory) {
     const int count = int(m.nodes.size());
     bool all_well = true;
-#pragma omp parallel for schedule(static) if (count >= 4096) reduction(&& : all_well)
-    for (int k = 0; k < count; ++k) {
+    auto well = [&](int k) {
       double moved = 0.0;
-      all_well = all_well && (surely_within(m, k, edges, before, after) ||
-                              runaway_ratio(m, k, edges, before, after, moved) <= 1.0);
+      return surely_within(m, k, edges, before, after) ||
+             runaway_ratio(m, k, edges, before, after, moved) <= 1.0;
+    };
+    if (team_pays(count, 4096)) {
+#pragma omp parallel for schedule(static) reduction(&& : all_well)
+      for (int k = 0; k < count; ++k) all_well = all_well && well(k);
+    } else {
+      for (int k = 0; k < count && all_well; ++k) all_well = well(k);
     }
     if (all_well) continue;
     for (int k = 0; k < count; ++k) {

@@ -17,6 +17,7 @@
 #include "constraints/doubled.hpp"
 #include "forces/explicit_fem.hpp"
 #include "forces/forces.hpp"
+#include "phymul/thread_team.hpp"
 #include "solver/rigid.hpp"
 #include "solver/runaway_guard.hpp"
 
@@ -262,9 +263,9 @@ void Simulator::end_contact_step(double dt) {
 void Simulator::accelerations(std::vector<Vec3>& a, std::span<Vec3> volume_scratch) {
   const double c = model_.damping;
   const int n = model_.node_count();
-#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
-  for (int i = 0; i < n; ++i)
+  for_each_index(n, team_pays(n, kParallelFrom), [&](int i) {
     a[i] = acceleration(model_.inverse_mass[i], state_.f[i], state_.v[i], c);
+  });
   if (!volume_scratch.empty()) project_volume_velocities(model_, state_.x, a, volume_scratch);
   project_doubled(model_, a);
 }
@@ -287,34 +288,32 @@ void Simulator::drift(double h) {
   State& s = state_;
   const int n = model_.node_count();
   const double c = model_.damping;
+  const bool team = team_pays(n, kParallelFrom);
   kick_rigid_bodies(model_, s, h);
   if (mostly_constrained(model_)) {  // every acceleration once, projected, one moving pass
     {
       double* __restrict a = flat(f_start_);
       const double *__restrict v = flat(s.v), *__restrict f = flat(s.f),
                    *__restrict w = flat(model_.inverse_mass);
-#pragma omp parallel for simd schedule(static) if (parallel : n >= kParallelFrom)
-      for (int e = 0; e < 3 * n; ++e) a[e] = acceleration(w[e], f[e], v[e], c);
+      for_each_lane(3 * n, team, [=](int e) { a[e] = acceleration(w[e], f[e], v[e], c); });
     }
     if (!model_.volumes.empty()) project_volume_velocities(model_, s.x, f_start_, x_start_);
     project_doubled(model_, f_start_);
     double* __restrict x = flat(s.x), * __restrict x0 = flat(x_start_), * __restrict v0 = flat(v_start_);
     const double* __restrict v = flat(s.v), * __restrict a = flat(f_start_);
-#pragma omp parallel for simd schedule(static) if (parallel : n >= kParallelFrom)
-    for (int e = 0; e < 3 * n; ++e) {
+    for_each_lane(3 * n, team, [=](int e) {
       x0[e] = x[e];
       v0[e] = v[e];  // the last good state, if the step fails its checks
       x[e] = drifted(x[e], v[e], a[e], h);
-    }
+    });
     return;
   }
   auto constrained_accelerations = [&](std::span<const int> nodes) {
     const int m = int(nodes.size());
-#pragma omp parallel for schedule(static) if (m >= kParallelFrom)
-    for (int k = 0; k < m; ++k) {
+    for_each_index(m, team_pays(m, kParallelFrom), [&](int k) {
       const int i = nodes[size_t(k)];
       f_start_[i] = acceleration(model_.inverse_mass[i], s.f[i], s.v[i], c);
-    }
+    });
   };
   for (const VolumeConstraint& vc : model_.volumes) constrained_accelerations(vc.nodes);
   for (int g = 0; g < model_.doubled.rows(); ++g) constrained_accelerations(model_.doubled.row(g));
@@ -324,20 +323,18 @@ void Simulator::drift(double h) {
   {
     double* __restrict x = flat(s.x), * __restrict x0 = flat(x_start_), * __restrict v0 = flat(v_start_);
     const double* __restrict v = flat(s.v), * __restrict f = flat(s.f), * __restrict w = flat(model_.inverse_mass);
-#pragma omp parallel for simd schedule(static) if (parallel : n >= kParallelFrom)
-    for (int e = 0; e < 3 * n; ++e) {
+    for_each_lane(3 * n, team, [=](int e) {
       x0[e] = x[e];
       v0[e] = v[e];  // the last good state, if the step fails its checks
       x[e] = drifted(x[e], v[e], acceleration(w[e], f[e], v[e], c), h);
-    }
+    });
   }
   auto move_again = [&](std::span<const int> nodes) {
     const int m = int(nodes.size());
-#pragma omp parallel for schedule(static) if (m >= kParallelFrom)
-    for (int k = 0; k < m; ++k) {
+    for_each_index(m, team_pays(m, kParallelFrom), [&](int k) {
       const int i = nodes[size_t(k)];
       s.x[i] = x_start_[i] + h * (v_start_[i] + 0.5 * h * f_start_[i]);
-    }
+    });
   };
   for (const VolumeConstraint& vc : model_.volumes) move_again(vc.nodes);
   for (int g = 0; g < model_.doubled.rows(); ++g) move_again(model_.doubled.row(g));
@@ -353,11 +350,10 @@ void Simulator::half_kick_from_positions(double h) {
     double* __restrict v = flat(s.v);
     const double *__restrict x = flat(s.x), *__restrict x0 = flat(x_start_),
                  *__restrict f = flat(s.f), *__restrict w = flat(model_.inverse_mass);
-#pragma omp parallel for simd schedule(static) if (parallel : n >= kParallelFrom)
-    for (int e = 0; e < 3 * n; ++e) {
+    for_each_lane(3 * n, team_pays(n, kParallelFrom), [=](int e) {
       const double moved = (x[e] - x0[e]) / h;
       v[e] = mul_add(0.5 * h, acceleration(w[e], f[e], moved, c), moved);
-    }
+    });
   }
   if (model_.doubled.rows() == 0) return;
   Vec3* __restrict v = s.v.data();
@@ -460,14 +456,23 @@ void Simulator::check_stability() const {
                *__restrict rest = flat(model_.rest_position), *__restrict x0 = flat(x_start_);
   double largest_coordinate_step2 = 0.0;
   int doubtful = 0;
-  // clang-format off
-#pragma omp parallel for simd schedule(static) if (parallel : n >= kParallelFrom) \
-    reduction(| : doubtful) reduction(max : largest_coordinate_step2)
-  // clang-format on
-  for (int e = 0; e < 3 * n; ++e) {
-    const double step = x[e] - x0[e], moved = x[e] - rest[e];
-    largest_coordinate_step2 = std::max(largest_coordinate_step2, step * step);
-    doubtful |= int(!(moved * moved < surely)) | int(!(std::abs(v[e]) < kFastest));
+  // (Values, not references to the reductions: those would keep the loop out of the lanes.)
+  auto step2 = [=](int e) { return (x[e] - x0[e]) * (x[e] - x0[e]); };
+  auto bad = [=](int e) {
+    const double moved = x[e] - rest[e];
+    return int(!(moved * moved < surely)) | int(!(std::abs(v[e]) < kFastest));
+  };
+  if (team_pays(n, kParallelFrom)) {
+    // clang-format off
+#pragma omp parallel for simd schedule(static) reduction(| : doubtful) \
+    reduction(max : largest_coordinate_step2)
+    // clang-format on
+    for (int e = 0; e < 3 * n; ++e)
+      largest_coordinate_step2 = std::max(largest_coordinate_step2, step2(e)), doubtful |= bad(e);
+  } else {
+#pragma omp simd reduction(| : doubtful) reduction(max : largest_coordinate_step2)
+    for (int e = 0; e < 3 * n; ++e)
+      largest_coordinate_step2 = std::max(largest_coordinate_step2, step2(e)), doubtful |= bad(e);
   }
   const double largest_step2 = 3.0 * largest_coordinate_step2;
   const bool all_well = doubtful == 0;
@@ -691,8 +696,8 @@ void Simulator::fire_update(StaticProgress& fire) {
   }
   const double alpha = fire.fire_alpha;
   const double keep = 1.0 - alpha, turn = aa > 0.0 ? alpha * std::sqrt(vv / aa) : 0.0;
-#pragma omp parallel for schedule(static) if (n >= kParallelFrom)
-  for (int i = 0; i < n; ++i) state_.v[i] = keep * state_.v[i] + turn * a[i];
+  for_each_index(n, team_pays(n, kParallelFrom),
+                 [&](int i) { state_.v[i] = keep * state_.v[i] + turn * a[i]; });
   if (++fire.fire_downhill > 5) fire.fire_alpha *= 0.99;
 }
 
