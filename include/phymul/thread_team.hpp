@@ -23,7 +23,7 @@ inline bool team_pays(long items, long from) {
 template <class Body>
 void for_each_index(int count, bool team, Body&& body) {
   if (team) {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) firstprivate(body)
     for (int i = 0; i < count; ++i) body(i);
   } else {
     auto here = body;  // as for_each_lane's
@@ -34,8 +34,8 @@ void for_each_index(int count, bool team, Body&& body) {
 // The same in vector lanes either way: the iterations must be independent.
 template <class Body>
 void for_each_lane(int count, bool team, Body&& body) {
-  if (team) {
-#pragma omp parallel for simd schedule(static)
+  if (team) {  // each thread its own copy, for the same reason as below
+#pragma omp parallel for simd schedule(static) firstprivate(body)
     for (int i = 0; i < count; ++i) body(i);
   } else {
     // A copy whose address does not escape to the team's data: its captures stay in

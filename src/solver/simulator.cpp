@@ -464,8 +464,8 @@ void Simulator::check_stability() const {
   };
   if (team_pays(n, kParallelFrom)) {
     // clang-format off
-#pragma omp parallel for simd schedule(static) reduction(| : doubtful) \
-    reduction(max : largest_coordinate_step2)
+#pragma omp parallel for simd schedule(static) firstprivate(step2, bad) \
+    reduction(| : doubtful) reduction(max : largest_coordinate_step2)
     // clang-format on
     for (int e = 0; e < 3 * n; ++e)
       largest_coordinate_step2 = std::max(largest_coordinate_step2, step2(e)), doubtful |= bad(e);
