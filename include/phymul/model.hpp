@@ -249,8 +249,8 @@ struct Model {
   // while every VolumeConstraint::coupled_at matches the positions.
   mutable std::vector<double> coupled_factor;
   mutable bool coupled_factor_valid = false;
-  // The joint projection's gradient scatter: 3 per node, as the positions, and one more so
-  // that four lanes can be read and written at the last node (finalize).
+  // The joint projection's gradient scatter: 4 per node from its first 32-byte boundary
+  // (three more to reach it; finalize).
   mutable std::vector<double> coupled_scatter;
   Vec3 gravity = Vec3::Zero();  // m/s^2
   double damping = 0.0;         // 1/s

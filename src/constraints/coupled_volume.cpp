@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "constraints/volume_gather.hpp"
@@ -24,7 +25,7 @@ Vec3 free_axes(const Vec3& inverse_mass) {
 bool usable(const Model& model) {
   if (model.volumes.empty() || model.volumes.size() > size_t(kMax)) return false;
   if (model.coupled_factor.size() != size_t(kMax * kMax) ||
-      model.coupled_scatter.size() != 3 * model.inverse_mass.size() + 1)
+      model.coupled_scatter.size() != 4 * model.inverse_mass.size() + 3)
     return false;
   for (const VolumeConstraint& c : model.volumes)
     if (c.coupled_direction.size() != c.nodes.size() ||
@@ -53,17 +54,23 @@ double six_gradient(const Model& model, const VolumeConstraint& c, std::span<con
 }
 
 #ifdef PHYMUL_VOLUME_AVX2
+// The scratch's first 32-byte boundary: node i's sum is the aligned register at 4 i.
+double* scatter_slots(const Model& model) {
+  const auto address = reinterpret_cast<std::uintptr_t>(model.coupled_scatter.data());
+  return model.coupled_scatter.data() + (32 - address % 32) % 32 / sizeof(double);
+}
+
 // 6 dV/dx of c summed at its nodes in the scratch, in the rotated lanes (z, x, y); returns
 // 6 V. A triangle's three cross products take one register each: about half the
-// instructions of the scalar scatter, no spills. The scratch has the positions' layout (one
-// index for both); a node's sum is read and written in four lanes, the fourth being the next
-// node's first: the cross products' fourth lane is 0, the sums are taken in turn, and that
-// lane is never read as a result.
+// instructions of the scalar scatter, no spills. A node's sum is one aligned register of its
+// own (the cross products' fourth lane is 0): a load of it always finds the last store of it
+// whole, which forwards; at the positions' 24-byte stride the stores overlapped the next
+// node's and each such load waited for them to retire (a fifth of the step, Intel).
 double rotated_six_gradient(const Model& model, const VolumeConstraint& c,
                             std::span<const Vec3> x) {
-  double* __restrict sum = model.coupled_scatter.data();
+  double* __restrict sum = scatter_slots(model);
   const double* __restrict p = x.data()->data();
-  for (int i : c.nodes) _mm256_storeu_pd(sum + 3 * size_t(i), _mm256_setzero_pd());
+  for (int i : c.nodes) _mm256_store_pd(sum + 4 * size_t(i), _mm256_setzero_pd());
   __m256d volume = _mm256_setzero_pd();
   const __m256i three = three_lanes();
   for (const Triangle& t : c.triangles) {
@@ -74,12 +81,12 @@ double rotated_six_gradient(const Model& model, const VolumeConstraint& c,
     const __m256d bd = _mm256_fmsub_pd(b, dr, _mm256_mul_pd(br, d));
     const __m256d da = _mm256_fmsub_pd(d, ar, _mm256_mul_pd(dr, a));
     const __m256d ab = _mm256_fmsub_pd(a, br, _mm256_mul_pd(ar, b));
-    double* s0 = sum + i0;
-    double* s1 = sum + i1;
-    double* s2 = sum + i2;
-    _mm256_storeu_pd(s0, _mm256_add_pd(_mm256_loadu_pd(s0), bd));
-    _mm256_storeu_pd(s1, _mm256_add_pd(_mm256_loadu_pd(s1), da));
-    _mm256_storeu_pd(s2, _mm256_add_pd(_mm256_loadu_pd(s2), ab));
+    double* s0 = sum + 4 * size_t(t[0]);
+    double* s1 = sum + 4 * size_t(t[1]);
+    double* s2 = sum + 4 * size_t(t[2]);
+    _mm256_store_pd(s0, _mm256_add_pd(_mm256_load_pd(s0), bd));
+    _mm256_store_pd(s1, _mm256_add_pd(_mm256_load_pd(s1), da));
+    _mm256_store_pd(s2, _mm256_add_pd(_mm256_load_pd(s2), ab));
     volume = _mm256_fmadd_pd(zxy(a), bd, volume);  // a . (b x d), lane by lane
   }
   return lane_sum(volume);
@@ -88,7 +95,7 @@ double rotated_six_gradient(const Model& model, const VolumeConstraint& c,
 // The per-node part of gradient_and_direction from the rotated sums, four lanes at once.
 double directions_from_rotated(const Model& model, const VolumeConstraint& c,
                                std::span<const Vec3> x, std::span<Vec3> grad, bool keep) {
-  const double* __restrict sum = model.coupled_scatter.data();
+  const double* __restrict sum = scatter_slots(model);
   const int* __restrict nodes = c.nodes.data();
   const Vec3* __restrict w = model.inverse_mass.data();
   Vec3* __restrict g = grad.data();
@@ -100,9 +107,7 @@ double directions_from_rotated(const Model& model, const VolumeConstraint& c,
   const int n = int(c.nodes.size());
   for (int m = 0; m < n; ++m) {
     const int i = nodes[m];
-    // The fourth lane is the next node's: zero it.
-    const __m256d six =
-        _mm256_blend_pd(yzx(_mm256_loadu_pd(sum + 3 * size_t(i))), _mm256_setzero_pd(), 0b1000);
+    const __m256d six = yzx(_mm256_load_pd(sum + 4 * size_t(i)));
     const __m256d d = _mm256_mul_pd(sixth, _mm256_mul_pd(six, load3(w[i])));
     store3(g[i], six);
     store3(direction[m], d);

@@ -21,8 +21,11 @@ namespace phymul {
 [[gnu::always_inline]] inline __m256d load3(const Vec3& v) {
   return _mm256_maskload_pd(v.data(), three_lanes());
 }
+// As a pair and a single: a masked store covers 32 bytes for the hardware, the next node's
+// first 8 too, and a load of that node would then wait for the store to retire (Intel).
 [[gnu::always_inline]] inline void store3(Vec3& v, __m256d r) {
-  _mm256_maskstore_pd(v.data(), three_lanes(), r);
+  _mm_storeu_pd(v.data(), _mm256_castpd256_pd128(r));
+  _mm_store_sd(v.data() + 2, _mm256_extractf128_pd(r, 1));
 }
 // (y, z, x, w): the cross product a x b is a * yzx(b) - yzx(a) * b in the lanes (z, x, y).
 [[gnu::always_inline]] inline __m256d yzx(__m256d v) {
