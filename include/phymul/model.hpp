@@ -250,7 +250,7 @@ struct Model {
   mutable std::vector<double> coupled_factor;
   mutable bool coupled_factor_valid = false;
   // The joint projection's gradient scatter: 4 per node from its first 32-byte boundary
-  // (three more to reach it; finalize).
+  // (sized by finalize, coupled_scatter_size).
   mutable std::vector<double> coupled_scatter;
   Vec3 gravity = Vec3::Zero();  // m/s^2
   double damping = 0.0;         // 1/s

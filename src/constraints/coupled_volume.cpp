@@ -25,7 +25,7 @@ Vec3 free_axes(const Vec3& inverse_mass) {
 bool usable(const Model& model) {
   if (model.volumes.empty() || model.volumes.size() > size_t(kMax)) return false;
   if (model.coupled_factor.size() != size_t(kMax * kMax) ||
-      model.coupled_scatter.size() != 4 * model.inverse_mass.size() + 3)
+      model.coupled_scatter.size() != coupled_scatter_size(model.inverse_mass.size()))
     return false;
   for (const VolumeConstraint& c : model.volumes)
     if (c.coupled_direction.size() != c.nodes.size() ||
@@ -359,9 +359,9 @@ bool project_coupled_volumes(const Model& model, std::span<Vec3> x, double load_
     } else {
       for (int k = 0; k < n; ++k) volumes[size_t(k)] = volume(model.volumes[size_t(k)], x);
     }
-    const double before = previous = worst;
+    previous = worst;
     worst = worst_error();
-    if (worst <= kExact || (worst <= kConverged && worst > 0.25 * before)) return true;
+    if (worst <= kExact || (worst <= kConverged && worst > 0.25 * previous)) return true;
   }
   return false;
 }

@@ -14,6 +14,10 @@ inline constexpr int kMaxJointVolumes = 16;
 // Lists in each VolumeConstraint::shared the nodes it shares with the earlier ones (finalize).
 void index_shared_volume_nodes(Model& model);
 
+// The joint gradient scatter's length for a model of `nodes` nodes: an aligned 32-byte slot
+// per node, and the three doubles it may take to reach the first 32-byte boundary.
+inline size_t coupled_scatter_size(size_t nodes) { return 4 * nodes + 3; }
+
 // Moves the nodes by x + sum_j lambda_j w dV_j/dx (the gradients at the start, as the single
 // surface's projection) with the lambdas that put every volume at its target at load_time,
 // to 1e-13 relative or round-off. Returns false, having moved nothing or moved towards the

@@ -64,7 +64,8 @@ void mark_coupled_volumes(Model& model) {
   model.coupled_factor.assign(
       model.coupled_volumes ? size_t(kMaxJointVolumes * kMaxJointVolumes) : 0, 0.0);
   model.coupled_factor_valid = false;
-  model.coupled_scatter.assign(model.coupled_volumes ? 4 * model.rest_position.size() + 3 : 0, 0.0);
+  model.coupled_scatter.assign(
+      model.coupled_volumes ? coupled_scatter_size(model.rest_position.size()) : 0, 0.0);
   index_shared_volume_nodes(model);
 }
 
