@@ -10,7 +10,6 @@
 
 #include "cube.hpp"
 #include "forces/shape_memory.hpp"
-#include "forces/shape_memory_single.hpp"
 #include "thread_cpu_time.hpp"
 
 namespace {
@@ -55,7 +54,6 @@ struct PassInputs {
   std::vector<Vec3> f;
 };
 
-// pass: add_shape_memory_forces or its single-precision variant.
 template <class Pass>
 void time_pass(benchmark::State& state, Pass pass) {
   omp_set_num_threads(int(state.range(1)));
@@ -79,55 +77,10 @@ void time_pass(benchmark::State& state, Pass pass) {
 }
 void BM_ShapeMemoryPass(benchmark::State& state) { time_pass(state, add_shape_memory_forces); }
 
-// The same pass with the polar batches in float lanes (forces/shape_memory_single.cpp).
-void BM_ShapeMemoryPassSingle(benchmark::State& state) {
-  time_pass(state, add_shape_memory_forces_single);
-}
-
-// Both passes alternately on the same snapshot, each iteration one of each: on a shared,
-// loaded machine the best and the median of each, taken side by side, compare them where two
-// separate benchmarks would each meet different load.
-void BM_ShapeMemoryPassDoubleVsSingle(benchmark::State& state) {
-  omp_set_num_threads(int(state.range(1)));
-  PassInputs in(int(state.range(0)));
-  std::vector<double> ns[2];  // per node: double, single
-  double energy = 0.0;
-  for (auto _ : state)
-    for (int precision = 0; precision < 2; ++precision) {
-      in.reset();
-      const auto start = std::chrono::steady_clock::now();
-      energy +=
-          precision == 0 ? in.run(add_shape_memory_forces) : in.run(add_shape_memory_forces_single);
-      ns[precision].push_back(
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() * 1e9 /
-          double(in.m.nodes.size()));
-    }
-  benchmark::DoNotOptimize(energy);
-  for (std::vector<double>& t : ns) std::sort(t.begin(), t.end());
-  const size_t median = ns[0].size() / 2;
-  state.counters["double_best_ns_per_node"] = ns[0][0];
-  state.counters["single_best_ns_per_node"] = ns[1][0];
-  state.counters["double_median_ns_per_node"] = ns[0][median];
-  state.counters["single_median_ns_per_node"] = ns[1][median];
-  state.counters["speedup_best"] = ns[0][0] / ns[1][0];
-  state.counters["speedup_median"] = ns[0][median] / ns[1][median];
-}
-
 BENCHMARK(BM_ShapeMemoryPass)
     ->Args({24, 1})
     ->Args({40, 1})
     ->Args({40, 2})
-    ->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_ShapeMemoryPassSingle)
-    ->Args({24, 1})
-    ->Args({40, 1})
-    ->Args({40, 2})
-    ->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_ShapeMemoryPassDoubleVsSingle)
-    ->Args({24, 1})
-    ->Args({40, 1})
-    ->Args({40, 2})
-    ->Iterations(200)
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -1,16 +1,19 @@
 #!/usr/bin/env bash
 # Installs the Debian packages phymul needs, only those missing.
-# usage: install-deps.sh build|demo
+# usage: install-deps.sh build|demo|sanitize
 set -euo pipefail
 build_pkgs=(cmake make g++ libeigen3-dev libyaml-cpp-dev libcli11-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev python3-meshio python3-numpy)
 demo_pkgs=(python3-vtk9 python3-matplotlib xvfb xauth)
+# The sanitized build and the fuzzers (clang, its sanitizer and libFuzzer runtimes, its OpenMP).
+sanitize_pkgs=(clang-14 libclang-rt-14-dev libomp-14-dev)
 # Wanted but not required: the tests that need them say loudly that they were skipped.
 optional_pkgs=(calculix-ccx)
 case "${1:-build}" in
   build) want=("${build_pkgs[@]}") ;;
   demo) want=("${build_pkgs[@]}" "${demo_pkgs[@]}") ;;
-  *) echo "install-deps.sh: unknown set '$1' (allowed: build, demo)" >&2; exit 2 ;;
+  sanitize) want=("${build_pkgs[@]}" "${sanitize_pkgs[@]}") ;;
+  *) echo "install-deps.sh: unknown set '$1' (allowed: build, demo, sanitize)" >&2; exit 2 ;;
 esac
 
 missing_of() {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <bit>
+#include <cassert>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -16,6 +17,7 @@ struct RowSubset {
 
   // Position of row k among the members (in row order), or -1 when it is not one.
   int find(int k) const {
+    assert(k >= 0 && size_t(k) < 64 * bits.size());
     const std::uint64_t word = bits[size_t(k) >> 6], bit = std::uint64_t(1) << (k & 63);
     if (!(word & bit)) return -1;
     return before[size_t(k) >> 6] + std::popcount(word & (bit - 1));

@@ -1,8 +1,7 @@
 // The algebra of the batched shape-memory kernels: 3-vectors, 3x3 matrices and quaternions
 // whose every component is a vector of lanes (GCC/Clang vector extensions), one node a lane.
-// L is the lane vector: four doubles (shape_memory_batch.cpp) or eight floats
-// (shape_memory_single.cpp). Constants are taken in L's own element type, so the double
-// kernel computes exactly what it did with double literals.
+// L is the lane vector (four doubles in shape_memory_batch.cpp). Constants are taken in L's
+// own element type.
 #pragma once
 
 #include <type_traits>

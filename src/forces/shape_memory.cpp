@@ -5,6 +5,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <stdexcept>
 
@@ -40,9 +41,12 @@ double normal_weight(const ShapeMemory& m, int k) {
   return f < 0 ? 0.0 : m.normal_weight[size_t(f)];
 }
 
-// Memory node k of a volume, a framed one.
+// Memory node k of a volume, a framed one: its callers read it only where the node has a
+// normal pair (weight > 0) or in frame mode, which frames every volume node.
 const std::array<int, 2>& frame_pair(const ShapeMemory& m, int k) {
-  return m.frame_pair[size_t(m.framed.find(k))];
+  const int f = m.framed.find(k);
+  assert(f >= 0 && "frame_pair of a node that has none");
+  return m.frame_pair[size_t(f)];
 }
 
 Vec3 neighbourhood_normal(const ShapeMemory& m, int k, std::span<const Vec3> p, const Vec3& g) {

@@ -1,6 +1,7 @@
 #include "forces/shape_memory_batch.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -315,7 +316,8 @@ void plan_polar_batches(ShapeMemory& m, std::span<const Vec3> rest) {
   m.batched_end.reserve(size_t(m.plan.blocks()));
   m.centred_start.reserve(size_t(m.plan.blocks()));
   std::vector<int> lanes, others, centred;
-  // Lanes share their neighbour count and whether they carry the normal pair.
+  // Lanes share their neighbour count and whether they carry the normal pair (framed): the
+  // kernel reads the normal pair of every lane when its first lane has one (fit_batch).
   auto count = [&m](int k) {
     return 2 * int(m.neighbours.row(k).size()) + (m.framed.find(k) >= 0 ? 1 : 0);
   };
@@ -483,6 +485,8 @@ void fit_batch(const ShapeMemory& m, const int* ks, std::span<const Vec3> rest,
   for (int a = 0; a < 3; ++a)
     for (int c = 0; c < 3; ++c) fit.A.a[a][c] = P.a[a][c] - sum_d.v[a] * fit.mean_r.v[c];
   b.normal_pair = m.framed.find(ks[0]) >= 0;
+  for (int l = 1; l < W; ++l)  // plan_polar_batches groups lanes by count(k), framed included
+    assert((m.framed.find(ks[l]) >= 0) == b.normal_pair && "a batch mixes framed lanes");
   if (b.normal_pair) add_normal_pair(m, b.ks, n, b.dx, b.r, fit, b.normal);
   const Eigen::Quaterniond* q[W] = {&rotations[ks[0]], &rotations[ks[1]], &rotations[ks[2]],
                                     &rotations[ks[3]]};

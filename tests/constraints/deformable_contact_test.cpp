@@ -19,7 +19,7 @@ TEST(DeformableContact, ClosestPointOnATriangleMatchesBruteForce) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1.0, 2.0);
   for (int trial = 0; trial < 200; ++trial) {
-    const Vec3 p(u(rng), u(rng), u(rng));
+    const Vec3 p = testing::random_vec3(u, rng);
     const Vec3 w = closest_barycentric(p, a, b, c);
     EXPECT_NEAR(w.sum(), 1.0, 1e-14);
     EXPECT_GE(w.minCoeff(), 0.0);

@@ -38,7 +38,7 @@ std::vector<Vec3> shaken(const Model& m, unsigned seed) {
   std::uniform_real_distribution<double> u(-1e-3, 1e-3);
   std::vector<Vec3> x = m.rest_position;
   for (int i = 0; i < m.node_count(); ++i)
-    if (m.inverse_mass[i].squaredNorm() > 0.0) x[i] += Vec3(u(rng), u(rng), u(rng));
+    if (m.inverse_mass[i].squaredNorm() > 0.0) x[i] += testing::random_vec3(u, rng);
   return x;
 }
 
@@ -124,7 +124,7 @@ TEST(JointVolumes, VelocityProjectionLeavesNoVolumeRateAndMatchesTheSweepsLimit)
   std::uniform_real_distribution<double> u(-0.1, 0.1);
   std::vector<Vec3> v(size_t(m.node_count()));
   for (int i = 0; i < m.node_count(); ++i)
-    v[i] = Vec3(u(rng), u(rng), u(rng))
+    v[i] = testing::random_vec3(u, rng)
                .cwiseProduct((m.inverse_mass[i].array() > 0.0).cast<double>().matrix());
   std::vector<Vec3> grad(v.size()), joint = v;
   ASSERT_TRUE(project_coupled_volume_velocities(m, x, joint, grad));
@@ -172,7 +172,7 @@ TEST(JointVolumes, PressuresRemovedFromAResidualLeaveItOrthogonalToEveryFreeGrad
   std::mt19937 rng(9);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::vector<Vec3> r0(size_t(m.node_count())), grad(r0.size());
-  for (Vec3& f : r0) f = Vec3(u(rng), u(rng), u(rng));
+  for (Vec3& f : r0) f = testing::random_vec3(u, rng);
   for (bool on_free_axes : {true, false}) {
     std::vector<Vec3> r = r0;
     ASSERT_TRUE(remove_coupled_volume_pressures(m, x, r, grad, on_free_axes));

@@ -27,7 +27,7 @@ TEST(VolumeConstraint, ProjectionHitsTheTargetUnderRandomDeformations) {
   std::vector<Vec3> grad(size_t(model.node_count()));
   for (int trial = 0; trial < 20; ++trial) {
     std::vector<Vec3> x = model.rest_position;
-    for (Vec3& p : x) p += Vec3(jitter(rng), jitter(rng), jitter(rng));
+    for (Vec3& p : x) p += testing::random_vec3(jitter, rng);
     for (int i : {0, 5, 17, 40}) x[i] = model.rest_position[i];
     // A squeeze along z loses about a quarter of the volume before the projection.
     for (Vec3& p : x) p.z() *= 0.75;

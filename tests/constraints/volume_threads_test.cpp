@@ -29,8 +29,8 @@ TEST(VolumeThreads, ProjectionsGiveBitIdenticalResultsOnOneAndTwoThreads) {
   std::uniform_real_distribution<double> u(-4e-4, 4e-4);
   std::vector<Vec3> x0 = model.rest_position, v0(x0.size());
   for (size_t i = 0; i < x0.size(); ++i) {
-    x0[i] += Vec3(u(rng), u(rng), u(rng)) + 0.05 * Vec3(0, 0, x0[i].z() * x0[i].x());
-    v0[i] = Vec3(u(rng), u(rng), u(rng)) * 100.0;
+    x0[i] += testing::random_vec3(u, rng) + 0.05 * Vec3(0, 0, x0[i].z() * x0[i].x());
+    v0[i] = testing::random_vec3(u, rng) * 100.0;
   }
   std::vector<std::vector<Vec3>> xs, vs;
   const int threads_before = omp_get_max_threads();

@@ -11,6 +11,7 @@
 #include "fem/system.hpp"
 #include "phymul/fem.hpp"
 #include "phymul/mesh.hpp"
+#include "support/models.hpp"
 
 namespace phymul {
 namespace {
@@ -78,7 +79,7 @@ TEST(IncompatibleHexa, PassesThePatchTestOnDistortedElements) {
   for (const auto& [name, nodes] : mesh.node_sets)
     for (int n : nodes) boundary[n] = 1;
   for (std::size_t n = 0; n < mesh.points.size(); ++n)
-    if (!boundary[n]) mesh.points[n] += Vec3(jitter(rng), jitter(rng), jitter(rng));
+    if (!boundary[n]) mesh.points[n] += testing::random_vec3(jitter, rng);
 
   Eigen::Matrix3d grad;  // F - I: stretch, shear and a turn
   grad << 0.08, 0.05, -0.02, -0.03, -0.06, 0.04, 0.01, 0.02, 0.1;

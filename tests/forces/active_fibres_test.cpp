@@ -64,7 +64,7 @@ TEST(ActiveFibres, ForcesAreMinusTheEnergyGradient) {
   std::vector<Vec3> x = model.rest_position;
   std::mt19937 rng(2);
   std::normal_distribution<double> n(0.0, 1e-3);
-  for (Vec3& p : x) p += Vec3(n(rng), n(rng), n(rng));
+  for (Vec3& p : x) p += testing::random_vec3(n, rng);
   std::vector<Vec3> f(x.size(), Vec3::Zero()), scratch(x.size());
   add_fibre_forces(model.fibres[0], x, 0.0, f);
   const double h = 1e-8;

@@ -64,7 +64,7 @@ TEST_P(ExplicitFemCells, ForcesAreMinusTheEnergyGradient) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1e-3, 1e-3);
   std::vector<Vec3> x = model.rest_position;
-  for (Vec3& p : x) p += Vec3(u(rng), u(rng), u(rng));
+  for (Vec3& p : x) p += testing::random_vec3(u, rng);
   const Evaluation at = evaluate(model, x);
   double largest = 0.0;
   for (const Vec3& f : at.f) largest = std::max(largest, f.norm());

@@ -70,7 +70,7 @@ TEST(Pressure, ClosedSurfaceHasNoResultantAndNoTorque) {
   std::vector<Vec3> x = model.rest_position;
   std::mt19937 rng(3);
   std::normal_distribution<double> jitter(0.0, 0.002);
-  for (Vec3& q : x) q += Vec3(jitter(rng), jitter(rng), jitter(rng));
+  for (Vec3& q : x) q += testing::random_vec3(jitter, rng);
   double area = 0.0;
   for (const Triangle& t : load.faces)
     area += 0.5 * (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]).norm();

@@ -40,7 +40,7 @@ Deformed deformed(const Model& model, std::mt19937& rng) {
   Deformed d;
   for (const Vec3& X : model.rest_position) {
     const Vec3 bent(X.x() + 4.0 * X.z() * X.z(), X.y() * (1.0 + 5.0 * X.x()), 0.9 * X.z());
-    d.x.push_back(R * bent + Vec3(noise(rng), noise(rng), noise(rng)));
+    d.x.push_back(R * bent + testing::random_vec3(noise, rng));
   }
   std::uniform_int_distribution<int> cold(0, 4);
   for (int k = 0; k < int(m.nodes.size()); ++k) {

@@ -55,7 +55,7 @@ TEST_P(ShapeMemoryFrames, ZeroUnderRandomRigidMotions) {
     State s = make_state(model);
     for (int trial = 0; trial < 20; ++trial) {
       const Eigen::Matrix3d R = testing::random_rotation(rng);
-      const Vec3 t(shift(rng), shift(rng), shift(rng));
+      const Vec3 t = testing::random_vec3(shift, rng);
       for (int i = 0; i < model.node_count(); ++i) s.x[i] = R * model.rest_position[i] + t;
       compute_forces(model, s, 0.0);
       // A force of 1 mm of stretch would be 0.05 N: rigid motion leaves only round-off.
@@ -95,7 +95,7 @@ TEST(ShapeMemory, ReactionKeepsMomentum) {
   for (bool reaction : {true, false}) {
     const Model model = testing::single_component(mesh, material(40.0, FrameMode::polar, reaction));
     State s = make_state(model);
-    for (Vec3& x : s.x) x += Vec3(jitter(rng), jitter(rng), jitter(rng));
+    for (Vec3& x : s.x) x += testing::random_vec3(jitter, rng);
     compute_forces(model, s, 0.0);
     Vec3 total = Vec3::Zero();
     double scale = 0.0;
@@ -133,7 +133,7 @@ TEST(ShapeMemory, PolarReactionForcesAreTheEnergyGradient) {
   for (Case& c : cases(FrameMode::polar)) {
     const Model model = testing::single_component(c.mesh, c.material);
     State s = make_state(model);
-    for (Vec3& x : s.x) x += Vec3(jitter(rng), jitter(rng), jitter(rng));
+    for (Vec3& x : s.x) x += testing::random_vec3(jitter, rng);
     compute_forces(model, s, 0.0);
     auto energy = [&](const std::vector<Vec3>& x) {
       State probe = s;

@@ -14,7 +14,13 @@
 #include "support/models.hpp"
 
 // AddressSanitizer brings its own operator new; replacing it there mixes allocators.
-#if defined(__SANITIZE_ADDRESS__)
+// (GCC says so by __SANITIZE_ADDRESS__, clang by __has_feature.)
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define PHYMUL_ASAN 1
+#endif
+#endif
+#if defined(__SANITIZE_ADDRESS__) || defined(PHYMUL_ASAN)
 #define PHYMUL_COUNT_ALLOCATIONS 0
 #else
 #define PHYMUL_COUNT_ALLOCATIONS 1

@@ -184,7 +184,7 @@ TEST(RigidBody, FreeRigidElasticAssemblyKeepsItsMomentum) {
   std::mt19937 rng(3);
   std::normal_distribution<double> n(0.0, 1e-2);
   for (int i = 0; i < model.node_count(); ++i)
-    if (sim.model().rigid_body_of[i] < 0) sim.state().v[i] = Vec3(n(rng), n(rng), n(rng));
+    if (sim.model().rigid_body_of[i] < 0) sim.state().v[i] = testing::random_vec3(n, rng);
   auto momentum = [&] {
     Vec3 p = sim.state().bodies[0].momentum;
     for (int i = 0; i < model.node_count(); ++i)

@@ -21,7 +21,7 @@ Simulator vibrating_block(Integrator integrator, double dt_fraction) {
   std::mt19937 rng(1);
   std::normal_distribution<double> n(0.0, 1e-3);
   Vec3 mean = Vec3::Zero();
-  for (Vec3& v : sim.state().v) v = Vec3(n(rng), n(rng), n(rng)), mean += v;
+  for (Vec3& v : sim.state().v) v = testing::random_vec3(n, rng), mean += v;
   mean /= double(sim.state().v.size());
   for (Vec3& v : sim.state().v) v -= mean;
   return sim;
