@@ -67,8 +67,8 @@ struct RunArguments {
   std::string scene, out = "out", checkpoint_every, resume;
   std::string format;  // empty: the scene's output.format
   bool quiet = false;
-  int threads = 0;      // 0: OpenMP's default (OMP_NUM_THREADS, else every core)
-  long stop_after = 0;  // hidden, for tests
+  int threads = 0;                       // 0: OpenMP's default (OMP_NUM_THREADS, else every core)
+  long stop_after = 0, pause_after = 0;  // hidden, for tests
 };
 
 int run(RunArguments a) {
@@ -77,6 +77,7 @@ int run(RunArguments a) {
     options.progress = !a.quiet && isatty(fileno(stderr));
     if (a.threads > 0) omp_set_num_threads(a.threads);
     options.stop_after_steps = a.stop_after;
+    options.pause_after_steps = a.pause_after;
     if (!a.checkpoint_every.empty())
       options.checkpoint_every = phymul::parse_checkpoint_interval(a.checkpoint_every);
     if (!a.resume.empty()) {
@@ -159,6 +160,7 @@ int main(int argc, char** argv) {
                    "for bit, as never interrupted)")
       ->excludes(output);
   run_cmd->add_option("--stop-after", run_args.stop_after)->group("");  // tests: as if interrupted
+  run_cmd->add_option("--pause-after", run_args.pause_after)->group("");  // tests: SIGSTOP there
 
   auto* check_cmd = app.add_subcommand("check", "validate a scene without running it");
   check_cmd->add_option("scene", scene_file, "scene file (YAML)")->required();

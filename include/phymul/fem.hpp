@@ -4,6 +4,7 @@
 
 #include <functional>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,29 @@ struct Dirichlet {
   double value = 0.0;
 };
 
+// Where a solve stands after a converged load step: everything its next load steps read, so
+// that a solve given it (Problem::resume_from) goes on exactly as if it had never stopped (a
+// run's checkpoint holds it). Vectors are over all dofs (3 per node) unless said otherwise.
+struct SolveState {
+  int load_steps_done = 0;
+  int newton_iterations = 0;
+  double load_factor = 0.0;
+  std::vector<double> displacement;  // m
+  // The last increment's second-order term, which the next predictor scales and adds (m), and
+  // that increment's load factor (0: none).
+  std::vector<double> curvature;
+  double curvature_increment = 0.0;
+  // The tangent the next predictor solves with (K_ff's values, the factorisation's input);
+  // empty: it refactorises first.
+  std::vector<double> factored_tangent;
+  // The system as last evaluated, at `displacement`: energy (J), internal force (N), the
+  // tangent's values (K_ff, K_fp), the incompatible modes' amplitudes (9 per such element).
+  double energy = 0.0;
+  std::vector<double> internal_force;
+  std::vector<double> tangent_ff, tangent_fp;
+  std::vector<double> mode_amplitudes;
+};
+
 // The equilibrium at the end of one load step (Problem::on_load_step).
 struct LoadStepReport {
   int step = 0, steps = 0;                // 1-based
@@ -43,6 +67,7 @@ struct LoadStepReport {
   const std::vector<Vec3>& reaction;      // N, per node (see Result)
   int newton_iterations = 0;              // so far
   double residual = 0.0;                  // N, largest free residual component
+  const SolveState& state;                // to resume from
 };
 
 struct Problem {
@@ -63,6 +88,9 @@ struct Problem {
   // Called after each converged load step; returning false stops the solve there
   // (Result::stopped, e.g. on an interruption request).
   std::function<bool(const LoadStepReport&)> on_load_step;
+  // Go on from this state of an earlier solve of the same problem (load steps done, Newton
+  // iterations counted on), with the same results as the uninterrupted solve.
+  std::optional<SolveState> resume_from;
 };
 
 struct Result {

@@ -314,6 +314,21 @@ struct RigidBodyState {
   Vec3 angular_momentum = Vec3::Zero();        // kg m^2/s, about the centre, world frame
 };
 
+// A node put back on the other side's surface of a contact pair by a step's contact stage:
+// what the velocity stage and a static residual read.
+struct PairContact {
+  int pair = 0, side = 0;  // the node belongs to component pair.components[side]
+  int node = 0;
+  Triangle triangle{};          // of the other side, global ids
+  Vec3 weights = Vec3::Zero();  // barycentric weights of the contact point
+  Vec3 normal = Vec3::UnitZ();  // unit, out of the other side
+  double impulse = 0.0;         // N s along normal on the node (minus it on the triangle)
+};
+// Position sweeps of the contact pairs' stage at most; they stop once no node is inside.
+inline constexpr int kPairContactSweeps = 4;
+
+// Everything a run changes that a later step reads: checkpoints save and restore it whole
+// (io/checkpoint.cpp visits every member, src/model/state_fields.hpp names them).
 struct State {
   double time = 0.0;  // s
   long step = 0;
@@ -329,7 +344,16 @@ struct State {
   // N, per contact pair: the force the second component exerted on the first over the last
   // step.
   std::vector<Vec3> pair_contact_force;
+  // Per node: the obstacle whose contact stage last moved it in the last step, or -1 (empty
+  // without obstacles): a node the volume projection then moved off by a hair still touches.
+  std::vector<int> obstacle_touching;
+  // The contact pairs' contacts of the last step, at most pair_contact_capacity(model) (so
+  // much is reserved: a step allocates nothing).
+  std::vector<PairContact> pair_contacts;
 };
+
+// The most contacts one step's contact-pair stage records.
+size_t pair_contact_capacity(const Model& model);
 
 State make_state(const Model& model);
 

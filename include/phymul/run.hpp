@@ -30,6 +30,9 @@ struct RunOptions {
   // For tests: behave as if interrupted after this many steps (dynamic) or at the first
   // progress check at or after this many relaxation iterations (static); 0: never.
   long stop_after_steps = 0;
+  // For tests of real signals: stop the process (SIGSTOP) once, where stop_after_steps would
+  // stop the run, so that a test can send it SIGINT or SIGKILL at a known step; 0: never.
+  long pause_after_steps = 0;
 };
 
 struct RunReport {

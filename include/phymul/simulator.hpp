@@ -105,7 +105,9 @@ class Simulator {
   // Checkpoints: what the next step reads besides State, and putting it all back.
   double load_time() const { return load_time_; }
   const StaticProgress& static_progress() const { return static_progress_; }
-  void restore(State state, double load_time, const StaticProgress& progress);
+  // The state must fit the model (every array at make_state's size): std::invalid_argument
+  // naming the member otherwise.
+  void restore(const State& state, double load_time, const StaticProgress& progress);
 
   double kinetic_energy() const;  // J
   // kg: the inertia mass scaling (simulation.mass_scaling_dt) or the static relaxation's
@@ -164,7 +166,6 @@ class Simulator {
   // to f_start_ (the accelerations) once spent, or to x_start_ before it is filled and
   // between steps. Only the Newton-Cotes scheme needs a1_ and scratch_.
   std::vector<Vec3> x_start_, v_start_, f_start_, a1_, scratch_;
-  std::vector<int> touching_;  // per node: obstacle in contact this step, or -1; obstacles only
   std::vector<ObstacleContact> contacts_;  // nodes touching an obstacle now; sized once
   std::vector<Vec3> contact_impulse_;      // per obstacle, N s, this step
   std::vector<Vec3> pair_impulse_;         // per contact pair, N s, this step

@@ -167,7 +167,7 @@ void apply_contacts(const Model& model, std::span<Vec3> x, double load_time, Con
 void apply_contact_velocities(const Model& model, std::span<const Vec3> x, std::span<Vec3> v,
                               double load_time, ContactStep& step) {
   if (step.deformable)
-    apply_deformable_contact_velocities(model, v, *step.deformable, step.pair_impulse);
+    apply_deformable_contact_velocities(model, v, *step.pair_contacts, step.pair_impulse);
   if (model.obstacles.empty()) return;
   int placed = -1;  // the obstacle whose base and velocity are below
   Vec3 base = Vec3::Zero(), shape_velocity = Vec3::Zero();

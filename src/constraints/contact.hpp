@@ -2,6 +2,7 @@
 #pragma once
 
 #include <span>
+#include <vector>
 
 #include "phymul/model.hpp"
 
@@ -38,8 +39,10 @@ struct ContactStep {
   double dt = 0.0;                // s
   std::span<int> touching;        // per node: the obstacle that last moved it this step, or -1
   std::span<Vec3> impulse;        // N s, per obstacle: momentum it gave the body this step
-  // Contact between deformable components (deformable_contact.hpp), when the model has any.
+  // Contact between deformable components (deformable_contact.hpp), when the model has any:
+  // the stages' buffers and the contacts they record (State::pair_contacts).
   struct DeformableContactWorkspace* deformable = nullptr;
+  std::vector<PairContact>* pair_contacts = nullptr;
   std::span<Vec3> pair_impulse;  // N s, per contact pair: momentum given to its first component
 };
 

@@ -111,27 +111,23 @@ void DeformableContactWorkspace::prepare(const Model& model) {
   hashes.resize(model.contact_pairs.size());
   margin.assign(model.contact_pairs.size(), 0.0);
   vertex_normal.assign(model.rest_position.size(), Vec3::Zero());
-  size_t capacity = 0;
   for (size_t k = 0; k < model.contact_pairs.size(); ++k) {
     const ContactPair& pair = model.contact_pairs[k];
     for (int side = 0; side < 2; ++side) {
       hashes[k][size_t(side)].reserve(pair.faces[size_t(side)].size());
-      capacity += pair.nodes[size_t(side)].size();
     }
     // Penetrations deeper than half a mean rest edge are not looked for: a step moves a node by
     // far less than that in any stable run.
     margin[k] = 0.5 * std::max(mean_edge(pair.faces[0], model.rest_position),
                                mean_edge(pair.faces[1], model.rest_position));
   }
-  records.assign(capacity * size_t(kSweeps), PairContact{});
-  count = 0;
 }
 
 void apply_deformable_contacts(const Model& model, std::span<Vec3> x,
-                               DeformableContactWorkspace& work, double dt,
-                               std::span<Vec3> pair_impulse) {
-  work.count = 0;
-  for (int sweep = 0; sweep < DeformableContactWorkspace::kSweeps; ++sweep) {
+                               DeformableContactWorkspace& work, std::vector<PairContact>& contacts,
+                               double dt, std::span<Vec3> pair_impulse) {
+  contacts.clear();
+  for (int sweep = 0; sweep < kPairContactSweeps; ++sweep) {
     bool any = false;
     for (size_t k = 0; k < model.contact_pairs.size(); ++k) {
       const ContactPair& pair = model.contact_pairs[k];
@@ -169,8 +165,8 @@ void apply_deformable_contacts(const Model& model, std::span<Vec3> x,
           // The multiplier is the impulse (times dt) on the node, and minus it on the triangle,
           // whether or not their supports hold them.
           pair_impulse[k] += (side == 0 ? lambda : -lambda) / dt * n;
-          if (work.count < work.records.size())
-            work.records[work.count++] = {int(k), side, p, t, b, n, lambda / dt};
+          if (contacts.size() < contacts.capacity())  // never reallocates in a step
+            contacts.push_back({int(k), side, p, t, b, n, lambda / dt});
           any = true;
         }
       }
@@ -180,10 +176,9 @@ void apply_deformable_contacts(const Model& model, std::span<Vec3> x,
 }
 
 void apply_deformable_contact_velocities(const Model& model, std::span<Vec3> v,
-                                         DeformableContactWorkspace& work,
+                                         std::span<PairContact> contacts,
                                          std::span<Vec3> pair_impulse) {
-  for (size_t r = 0; r < work.count; ++r) {
-    const PairContact& c = work.records[r];
+  for (PairContact& c : contacts) {
     const Vec3& n = c.normal;
     const Vec3& b = c.weights;
     Vec3 surface = Vec3::Zero();
@@ -201,14 +196,13 @@ void apply_deformable_contact_velocities(const Model& model, std::span<Vec3> v,
       v[size_t(c.triangle[j])] -=
           lambda * b[j] * model.inverse_mass[size_t(c.triangle[j])].cwiseProduct(n);
     pair_impulse[size_t(c.pair)] += (c.side == 0 ? lambda : -lambda) * n;
-    work.records[r].impulse += lambda;
+    c.impulse += lambda;
   }
 }
 
-void add_deformable_contact_forces(const DeformableContactWorkspace& work, double dt,
+void add_deformable_contact_forces(std::span<const PairContact> contacts, double dt,
                                    std::span<Vec3> r) {
-  for (size_t k = 0; k < work.count; ++k) {
-    const PairContact& c = work.records[k];
+  for (const PairContact& c : contacts) {
     const Vec3 f = c.impulse / dt * c.normal;
     r[size_t(c.node)] += f;
     for (int j = 0; j < 3; ++j) r[size_t(c.triangle[j])] -= c.weights[j] * f;

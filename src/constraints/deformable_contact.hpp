@@ -15,24 +15,12 @@ namespace phymul {
 // Closest point of triangle (a, b, c) to p, as barycentric weights (sum 1, each >= 0).
 Vec3 closest_barycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
 
-// A node put back on the other side's surface this step: what the velocity stage needs.
-struct PairContact {
-  int pair = 0, side = 0;  // the node belongs to component pair.components[side]
-  int node = 0;
-  Triangle triangle{};          // of the other side, global ids
-  Vec3 weights = Vec3::Zero();  // barycentric weights of the contact point
-  Vec3 normal = Vec3::UnitZ();  // unit, out of the other side
-  double impulse = 0.0;         // N s along normal on the node (minus it on the triangle)
-};
-
 // Buffers of the contact stages, sized once from the model: a step allocates nothing.
+// (The contacts found, which later steps read, are State::pair_contacts.)
 struct DeformableContactWorkspace {
-  static constexpr int kSweeps = 4;  // position sweeps at most; they stop once none is inside
   std::vector<std::array<TriangleHash, 2>> hashes;  // per pair and side
   std::vector<double> margin;                       // per pair, m: deepest penetration found
   std::vector<Vec3> vertex_normal;                  // per node, area-weighted
-  std::vector<PairContact> records;
-  size_t count = 0;
 
   void prepare(const Model& model);
 };
@@ -40,22 +28,23 @@ struct DeformableContactWorkspace {
 // Position stage: Gauss-Seidel sweeps over the surface nodes of every pair; a node inside the
 // other surface (signed distance along the interpolated vertex normal below zero) and its
 // closest triangle move apart along that normal, in proportion to their inverse masses, until
-// it lies on the surface. pair_impulse[k] gains the momentum (N s) given to the first
+// it lies on the surface, recorded in `contacts` (cleared first; capacity
+// pair_contact_capacity). pair_impulse[k] gains the momentum (N s) given to the first
 // component of pair k.
 void apply_deformable_contacts(const Model& model, std::span<Vec3> x,
-                               DeformableContactWorkspace& work, double dt,
-                               std::span<Vec3> pair_impulse);
+                               DeformableContactWorkspace& work, std::vector<PairContact>& contacts,
+                               double dt, std::span<Vec3> pair_impulse);
 
 // Velocity stage: removes the approaching normal velocity of each recorded node relative to
 // its triangle, momentum-conserving; adds the first components' m dv to pair_impulse.
 void apply_deformable_contact_velocities(const Model& model, std::span<Vec3> v,
-                                         DeformableContactWorkspace& work,
+                                         std::span<PairContact> contacts,
                                          std::span<Vec3> pair_impulse);
 
 // Adds to r (N, per node) the contact forces of the last step (impulse / dt on each recorded
 // node, minus it spread on its triangle): what a static residual takes out, as the contact
 // balances it.
-void add_deformable_contact_forces(const DeformableContactWorkspace& work, double dt,
+void add_deformable_contact_forces(std::span<const PairContact> contacts, double dt,
                                    std::span<Vec3> r);
 
 }  // namespace phymul

@@ -30,7 +30,8 @@ void apply_position_constraints(const Model& model, std::span<Vec3> x, double lo
   apply_prescribed(model, x, load_time);
   apply_contacts(model, x, load_time, contact);
   if (contact.deformable)
-    apply_deformable_contacts(model, x, *contact.deformable, contact.dt, contact.pair_impulse);
+    apply_deformable_contacts(model, x, *contact.deformable, *contact.pair_contacts, contact.dt,
+                              contact.pair_impulse);
   project_volumes(model, x, load_time, scratch, contact.x_start);
   project_doubled(model, x);
 }

@@ -3,6 +3,7 @@
 // sorting), and the sparse factorisation can keep its symbolic analysis.
 #include <Eigen/SparseCore>
 #include <algorithm>
+#include <stdexcept>
 
 #include "fem/system.hpp"
 
@@ -192,5 +193,45 @@ void System::scatter_add(const Eigen::VectorXd& part, const std::vector<int>& do
                          Eigen::VectorXd& full) const {
   for (std::size_t i = 0; i < dofs.size(); ++i) full[dofs[i]] += part[Eigen::Index(i)];
 }
+
+namespace {
+
+std::vector<double> values_of(const SparseMatrix& m) {
+  return {m.valuePtr(), m.valuePtr() + m.nonZeros()};
+}
+
+void set_values(SparseMatrix& m, const std::vector<double>& values) {
+  if (values.size() != size_t(m.nonZeros()))
+    throw std::invalid_argument("fem: a saved tangent does not fit this system's pattern");
+  std::copy(values.begin(), values.end(), m.valuePtr());
+}
+
+}  // namespace
+
+void System::save_evaluation(SolveState& state) const {
+  state.energy = energy_;
+  state.internal_force.assign(internal_.data(), internal_.data() + internal_.size());
+  state.tangent_ff = values_of(k_ff_);
+  state.tangent_fp = values_of(k_fp_);
+  state.mode_amplitudes.clear();
+  for (const ModeAmplitudes& a : modes_)
+    state.mode_amplitudes.insert(state.mode_amplitudes.end(), a.data(), a.data() + a.size());
+}
+
+void System::restore_evaluation(const SolveState& state) {
+  if (state.internal_force.size() != size_t(internal_.size()) ||
+      state.mode_amplitudes.size() != 9 * modes_.size())
+    throw std::invalid_argument("fem: a saved evaluation does not fit this system");
+  energy_ = state.energy;
+  internal_ = Eigen::Map<const Eigen::VectorXd>(state.internal_force.data(), internal_.size());
+  set_values(k_ff_, state.tangent_ff);
+  set_values(k_fp_, state.tangent_fp);
+  for (size_t e = 0; e < modes_.size(); ++e)
+    modes_[e] = Eigen::Map<const ModeAmplitudes>(state.mode_amplitudes.data() + 9 * e);
+}
+
+std::vector<double> System::tangent_values() const { return values_of(k_ff_); }
+
+void System::set_tangent_values(const std::vector<double>& values) { set_values(k_ff_, values); }
 
 }  // namespace phymul::fem

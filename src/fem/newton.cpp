@@ -13,6 +13,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 #include <utility>
 
 namespace phymul::fem {
@@ -70,7 +71,38 @@ double LoadStepper::update_tolerance() const {
 
 bool LoadStepper::factorize(StepFailure& failure) {
   factor_current_ = solver_->factorize(system_.free_free(), failure);
+  if (factor_current_) factored_ = system_.tangent_values();  // what a resume refactorises
   return factor_current_;
+}
+
+void LoadStepper::save(SolveState& state) const {
+  state.newton_iterations = iterations_;
+  state.load_factor = s_;
+  state.displacement.assign(u_.data(), u_.data() + u_.size());
+  state.curvature.assign(curvature_.data(), curvature_.data() + curvature_.size());
+  state.curvature_increment = curvature_increment_;
+  state.factored_tangent = factor_current_ ? factored_ : std::vector<double>{};
+  system_.save_evaluation(state);
+}
+
+void LoadStepper::resume(const SolveState& state) {
+  if (state.displacement.size() != size_t(u_.size()) ||
+      (state.curvature_increment > 0.0 && state.curvature.size() != size_t(u_.size())))
+    throw std::invalid_argument("fem: the state to resume from does not fit this problem");
+  factor_current_ = false;
+  if (!state.factored_tangent.empty() && solver_) {
+    StepFailure failure;
+    system_.set_tangent_values(state.factored_tangent);  // restore_evaluation sets it back
+    if (!factorize(failure))
+      throw std::invalid_argument("fem: the saved tangent does not factorise: " + failure.reason);
+  }
+  system_.restore_evaluation(state);
+  iterations_ = state.newton_iterations;
+  s_ = state.load_factor;
+  u_ = Eigen::Map<const Eigen::VectorXd>(state.displacement.data(), u_.size());
+  curvature_increment_ = state.curvature_increment;
+  if (curvature_increment_ > 0.0)
+    curvature_ = Eigen::Map<const Eigen::VectorXd>(state.curvature.data(), u_.size());
 }
 
 // Tangent predictor: the free dofs follow the prescribed increment and the load increment

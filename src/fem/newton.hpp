@@ -6,6 +6,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "fem/linear_solver.hpp"
 #include "fem/system.hpp"
@@ -38,6 +39,11 @@ class LoadStepper {
   double free_residual() const;                   // largest free residual component, N
   int iterations() const { return iterations_; }  // Newton corrections, predictors excluded
 
+  // All the next load steps read (SolveState; load_steps_done is the caller's), and going on
+  // from such a state of a stepper of the same system.
+  void save(SolveState& state) const;
+  void resume(const SolveState& state);
+
  private:
   Eigen::VectorXd free_residual_vector(double s) const;
   double threshold(double s) const;
@@ -55,6 +61,7 @@ class LoadStepper {
   // The factorisation holds a tangent of the current equilibrium (or of the last Newton
   // iterate before it), good enough for the next predictor.
   bool factor_current_ = false;
+  std::vector<double> factored_;  // K_ff's values the factorisation was made from
   // What the tangent predictor of the last increment missed (all dofs; its second-order
   // term) and that increment's size: the next predictor adds it, scaled to its increment.
   Eigen::VectorXd predicted_;

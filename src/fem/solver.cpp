@@ -123,10 +123,17 @@ Result solve_static(const Problem& problem) {
   for (std::size_t n = 0; n < problem.nodal_force.size(); ++n)
     load.segment<3>(3 * Eigen::Index(n)) += problem.nodal_force[n];
   LoadStepper stepper(system, std::move(load), std::move(target), geometry, settings);
+  int first = 1;
+  if (problem.resume_from) {
+    stepper.resume(*problem.resume_from);
+    first = problem.resume_from->load_steps_done + 1;
+  }
 
   Result result;
   result.converged = true;
-  for (int step = 1; step <= problem.load_steps && result.converged; ++step) {
+  result.load_steps_done = first - 1;
+  SolveState state;
+  for (int step = first; step <= problem.load_steps && result.converged; ++step) {
     result.message = advance(stepper, step, problem.load_steps);
     result.converged = result.message.empty();
     if (!result.converged) break;
@@ -134,12 +141,15 @@ Result solve_static(const Problem& problem) {
     if (problem.on_load_step) {
       result.displacement = per_node(stepper.displacement());
       result.reaction = per_node(stepper.reaction());
+      stepper.save(state);
+      state.load_steps_done = step;
       const LoadStepReport report{step,
                                   problem.load_steps,
                                   result.displacement,
                                   result.reaction,
                                   stepper.iterations(),
-                                  stepper.free_residual()};
+                                  stepper.free_residual(),
+                                  state};
       if (!problem.on_load_step(report) && step < problem.load_steps) {
         result.converged = false;
         result.stopped = true;

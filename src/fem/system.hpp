@@ -43,6 +43,14 @@ class System {
   const SparseMatrix& free_free() const { return k_ff_; }  // lower triangle only
   const SparseMatrix& free_prescribed() const { return k_fp_; }
 
+  // The last evaluation's outputs (and the incompatible modes it left, the next one's start),
+  // and putting them back, so that a resumed solve needs no evaluation of its own.
+  void save_evaluation(SolveState& state) const;
+  void restore_evaluation(const SolveState& state);
+  // K_ff's values, in its fixed pattern.
+  std::vector<double> tangent_values() const;
+  void set_tangent_values(const std::vector<double>& values);
+
   Eigen::VectorXd gather(const Eigen::VectorXd& full, const std::vector<int>& dofs) const;
   void scatter_add(const Eigen::VectorXd& part, const std::vector<int>& dofs,
                    Eigen::VectorXd& full) const;

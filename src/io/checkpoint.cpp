@@ -2,87 +2,116 @@
 
 #include <fmt/format.h>
 
+#include <array>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <tuple>
 
+#include "io/checkpoint_fields.hpp"
+
 namespace phymul {
+
 namespace {
 
 // Layout: magic, version, byte-order mark, payload size, payload, FNV-1a of the payload.
 // Integers are 64-bit and doubles their IEEE bits, in this machine's byte order (the mark
 // refuses a file from a machine of the other order).
 constexpr char kMagic[8] = {'P', 'H', 'Y', 'M', 'U', 'L', 'C', 'K'};
-constexpr std::uint64_t kVersion = 1;
+constexpr std::uint64_t kVersion = 2;
 constexpr std::uint64_t kByteOrderMark = 0x0102030405060708ULL;
 constexpr std::size_t kHeaderBytes = sizeof kMagic + 3 * sizeof(std::uint64_t);
 
+// Binary form of each member type; aggregates go member by member (fields::for_each), so the
+// file holds every member of Checkpoint and of the State inside it.
+template <class T>
+concept EigenFixed = requires {
+  T::RowsAtCompileTime, T::ColsAtCompileTime;
+}
+&&(T::RowsAtCompileTime > 0 && T::ColsAtCompileTime > 0);
+
 class Writer {
  public:
-  void u64(std::uint64_t v) { raw(&v, sizeof v); }
-  void i64(long long v) { raw(&v, sizeof v); }
-  void f64(double v) { raw(&v, sizeof v); }
-  void text(std::string_view s) {
-    u64(s.size());
-    out_.append(s);
-  }
-  void vectors(const std::vector<Vec3>& v) {
-    u64(v.size());
-    for (const Vec3& p : v)
-      for (int a = 0; a < 3; ++a) f64(p[a]);
+  template <class T>
+  void put(const T& v) {
+    if constexpr (std::is_same_v<T, bool>) {
+      put(std::uint64_t(v ? 1 : 0));
+    } else if constexpr (std::is_enum_v<T>) {
+      put(static_cast<long long>(v));
+    } else if constexpr (std::is_integral_v<T>) {
+      raw_value(static_cast<std::conditional_t<std::is_signed_v<T>, long long, std::uint64_t>>(v));
+    } else if constexpr (std::is_same_v<T, double>) {
+      raw_value(v);
+    } else if constexpr (std::is_same_v<T, std::string>) {
+      put(std::uint64_t(v.size()));
+      out_.append(v);
+    } else if constexpr (std::is_same_v<T, Eigen::Quaterniond>) {
+      for (double c : {v.w(), v.x(), v.y(), v.z()}) put(c);
+    } else if constexpr (EigenFixed<T>) {
+      for (Eigen::Index k = 0; k < v.size(); ++k) put(double(v.data()[k]));
+    } else if constexpr (fields::is_vector<T>) {
+      put(std::uint64_t(v.size()));
+      for (const auto& e : v) put(e);
+    } else if constexpr (fields::is_array<T>) {
+      for (const auto& e : v) put(e);
+    } else {
+      fields::for_each(v, [&](std::string_view, const auto& member) { put(member); });
+    }
   }
   void raw(const void* p, std::size_t n) { out_.append(static_cast<const char*>(p), n); }
   const std::string& bytes() const { return out_; }
 
  private:
+  template <class T>
+  void raw_value(T v) {
+    raw(&v, sizeof v);
+  }
   std::string out_;
 };
 
 class Reader {
  public:
-  static constexpr std::size_t kAny = std::size_t(-1);
   Reader(std::string_view bytes, std::size_t base, const std::string& name)
       : in_(bytes), base_(base), name_(name) {}
 
-  std::uint64_t u64(const char* field) {
-    std::uint64_t v;
-    take(&v, sizeof v, field);
-    return v;
-  }
-  long long i64(const char* field) {
-    long long v;
-    take(&v, sizeof v, field);
-    return v;
-  }
-  double f64(const char* field) {
-    double v;
-    take(&v, sizeof v, field);
-    return v;
-  }
-  // A count of items of `item_bytes` each that must fit in what is left of the file.
-  std::size_t count(const char* field, std::size_t item_bytes) {
-    const std::uint64_t n = u64(field);
-    if (n > (in_.size() - at_) / item_bytes)
-      fail(fmt::format("'{}' claims {} items of {} bytes, more than the {} bytes left", field, n,
-                       item_bytes, in_.size() - at_));
-    return std::size_t(n);
-  }
-  std::string text(const char* field) {
-    const std::size_t n = count(field, 1);
-    std::string s(in_.substr(at_, n));
-    at_ += n;
-    return s;
-  }
-  std::vector<Vec3> vectors(const char* field, std::size_t expected = kAny) {
-    const std::size_t n = count(field, 3 * sizeof(double));
-    if (expected != kAny && n != expected)
-      fail(
-          fmt::format("'{}' has {} entries where the checkpoint has {} nodes", field, n, expected));
-    std::vector<Vec3> v(n);
-    for (Vec3& p : v)
-      for (int a = 0; a < 3; ++a) p[a] = f64(field);
-    return v;
+  // Reads v's binary form; `field` names it in messages (a member's path).
+  template <class T>
+  void get(T& v, const std::string& field) {
+    if constexpr (std::is_same_v<T, bool>) {
+      const std::uint64_t b = scalar<std::uint64_t>(field);
+      if (b > 1) fail(fmt::format("'{}' is {}, expected 0 or 1", field, b));
+      v = b == 1;
+    } else if constexpr (std::is_enum_v<T>) {
+      v = static_cast<T>(scalar<long long>(field));
+    } else if constexpr (std::is_integral_v<T>) {
+      using Wide = std::conditional_t<std::is_signed_v<T>, long long, std::uint64_t>;
+      const Wide w = scalar<Wide>(field);
+      if (w < Wide(std::numeric_limits<T>::lowest()) || w > Wide(std::numeric_limits<T>::max()))
+        fail(fmt::format("'{}' is {}, out of range", field, w));
+      v = T(w);
+    } else if constexpr (std::is_same_v<T, double>) {
+      v = scalar<double>(field);
+    } else if constexpr (std::is_same_v<T, std::string>) {
+      const std::size_t n = count(field);
+      v.assign(in_.substr(at_, n));
+      at_ += n;
+    } else if constexpr (std::is_same_v<T, Eigen::Quaterniond>) {
+      double c[4];
+      for (double& e : c) e = scalar<double>(field);
+      v = Eigen::Quaterniond(c[0], c[1], c[2], c[3]);
+    } else if constexpr (EigenFixed<T>) {
+      for (Eigen::Index k = 0; k < v.size(); ++k) v.data()[k] = scalar<double>(field);
+    } else if constexpr (fields::is_vector<T>) {
+      v.resize(count(field));
+      for (size_t k = 0; k < v.size(); ++k) get(v[k], field);
+    } else if constexpr (fields::is_array<T>) {
+      for (auto& e : v) get(e, field);
+    } else {
+      fields::for_each(v, [&](std::string_view name, auto& member) {
+        get(member, field.empty() ? std::string(name) : field + "." + std::string(name));
+      });
+    }
   }
   void expect_end() const {
     if (at_ != in_.size())
@@ -94,11 +123,22 @@ class Reader {
   }
 
  private:
-  void take(void* p, std::size_t n, const char* field) {
-    if (in_.size() - at_ < n)
-      fail(fmt::format("'{}' needs {} bytes, {} are left", field, n, in_.size() - at_));
-    std::memcpy(p, in_.data() + at_, n);
-    at_ += n;
+  template <class T>
+  T scalar(const std::string& field) {
+    T v;
+    if (in_.size() - at_ < sizeof v)
+      fail(fmt::format("'{}' needs {} bytes, {} are left", field, sizeof v, in_.size() - at_));
+    std::memcpy(&v, in_.data() + at_, sizeof v);
+    at_ += sizeof v;
+    return v;
+  }
+  // A count of items (a byte each at least) that must fit in what is left of the file.
+  std::size_t count(const std::string& field) {
+    const std::uint64_t n = scalar<std::uint64_t>(field);
+    if (n > in_.size() - at_)
+      fail(fmt::format("'{}' claims {} items, more than the {} bytes left", field, n,
+                       in_.size() - at_));
+    return std::size_t(n);
   }
 
   std::string_view in_;
@@ -106,111 +146,33 @@ class Reader {
   const std::string& name_;
 };
 
-std::string payload(const Checkpoint& c) {
-  Writer w;
-  w.text(c.scene_file);
-  w.u64(c.scene_hash);
-  w.u64(c.model_hash);
-  w.u64(c.static_mode ? 1 : 0);
-  w.f64(c.dt);
+// What the file's fields must agree on among themselves (the model's sizes are checked by
+// check_state_shape when the run has its model).
+void check_fields(Reader& r, const Checkpoint& c) {
   const State& s = c.state;
-  w.f64(s.time);
-  w.i64(s.step);
-  w.vectors(s.x);
-  w.vectors(s.v);
-  w.vectors(s.f);
-  w.u64(s.rotation.size());
-  for (const Eigen::Quaterniond& q : s.rotation)
-    for (double v : {q.w(), q.x(), q.y(), q.z()}) w.f64(v);
-  w.f64(s.shape_memory_energy);
-  w.u64(s.bodies.size());
-  for (const RigidBodyState& b : s.bodies) {
-    for (double v : {b.center.x(), b.center.y(), b.center.z()}) w.f64(v);
-    for (double v : {b.orientation.w(), b.orientation.x(), b.orientation.y(), b.orientation.z()})
-      w.f64(v);
-    for (double v : {b.momentum.x(), b.momentum.y(), b.momentum.z()}) w.f64(v);
-    for (double v : {b.angular_momentum.x(), b.angular_momentum.y(), b.angular_momentum.z()})
-      w.f64(v);
-  }
-  w.f64(c.load_time);
-  w.i64(c.static_progress.load_step);
-  w.i64(c.static_progress.iterations);
-  w.i64(c.static_progress.step_iterations);
-  w.f64(c.static_progress.previous_kinetic);
-  w.f64(c.static_progress.fire_alpha);
-  w.i64(c.static_progress.fire_downhill);
-  w.i64(c.steps_done);
-  w.f64(c.next_frame);
-  w.u64(c.frames.size());
-  for (const PvdEntry& e : c.frames) {
-    w.f64(e.time);
-    w.text(e.file);
-  }
-  w.text(c.monitors);
-  return w.bytes();
-}
-
-long non_negative(Reader& r, long long v, const char* field) {
-  if (v < 0) r.fail(fmt::format("'{}' is {}, expected 0 or more", field, v));
-  return long(v);
-}
-
-Checkpoint parse_payload(Reader& r) {
-  Checkpoint c;
-  c.scene_file = r.text("scene file");
-  c.scene_hash = r.u64("scene hash");
-  c.model_hash = r.u64("model hash");
-  const std::uint64_t mode = r.u64("mode");
-  if (mode > 1) r.fail(fmt::format("'mode' is {}, expected 0 (dynamic) or 1 (static)", mode));
-  c.static_mode = mode == 1;
-  c.dt = r.f64("dt");
-  State& s = c.state;
-  s.time = r.f64("time");
-  s.step = non_negative(r, r.i64("step"), "step");
-  s.x = r.vectors("positions");
-  s.v = r.vectors("velocities", s.x.size());
-  s.f = r.vectors("forces", s.x.size());
-  s.rotation.resize(r.count("rotations", 4 * sizeof(double)));
-  for (Eigen::Quaterniond& q : s.rotation) {
-    const double w = r.f64("rotations"), x = r.f64("rotations"), y = r.f64("rotations"),
-                 z = r.f64("rotations");
-    q = Eigen::Quaterniond(w, x, y, z);
-  }
-  s.shape_memory_energy = r.f64("shape memory energy");
-  s.bodies.resize(r.count("rigid bodies", 13 * sizeof(double)));
-  for (RigidBodyState& b : s.bodies) {
-    auto vec = [&r](const char* field) {
-      const double x = r.f64(field), y = r.f64(field), z = r.f64(field);
-      return Vec3(x, y, z);
-    };
-    b.center = vec("rigid body centre");
-    const double w = r.f64("rigid body orientation"), x = r.f64("rigid body orientation"),
-                 y = r.f64("rigid body orientation"), z = r.f64("rigid body orientation");
-    b.orientation = Eigen::Quaterniond(w, x, y, z);
-    b.momentum = vec("rigid body momentum");
-    b.angular_momentum = vec("rigid body angular momentum");
-  }
-  c.load_time = r.f64("load time");
-  StaticProgress& p = c.static_progress;
-  p.load_step = int(non_negative(r, r.i64("load step"), "load step"));
-  p.iterations = non_negative(r, r.i64("iterations"), "iterations");
-  p.step_iterations = non_negative(r, r.i64("load step iterations"), "load step iterations");
-  p.previous_kinetic = r.f64("previous kinetic energy");
-  p.fire_alpha = r.f64("FIRE mixing");
-  p.fire_downhill = non_negative(r, r.i64("FIRE downhill steps"), "FIRE downhill steps");
-  c.steps_done = non_negative(r, r.i64("steps done"), "steps done");
-  c.next_frame = r.f64("next frame time");
-  c.frames.resize(r.count("frames", sizeof(double) + sizeof(std::uint64_t)));
-  for (PvdEntry& e : c.frames) {
-    e.time = r.f64("frame time");
-    e.file = r.text("frame file");
+  const size_t n = s.x.size();
+  auto per_node = [&](size_t size, const char* field, bool may_be_empty) {
+    if (size != n && !(may_be_empty && size == 0))
+      r.fail(fmt::format("'state.{}' has {} entries where the checkpoint has {} nodes", field, size,
+                         n));
+  };
+  per_node(s.v.size(), "v", false);
+  per_node(s.f.size(), "f", false);
+  per_node(s.obstacle_touching.size(), "obstacle_touching", true);
+  auto non_negative = [&](long long v, const char* field) {
+    if (v < 0) r.fail(fmt::format("'{}' is {}, expected 0 or more", field, v));
+  };
+  non_negative(s.step, "state.step");
+  non_negative(c.steps_done, "steps_done");
+  const StaticProgress& p = c.static_progress;
+  non_negative(p.load_step, "static_progress.load_step");
+  non_negative(p.iterations, "static_progress.iterations");
+  non_negative(p.step_iterations, "static_progress.step_iterations");
+  non_negative(p.fire_downhill, "static_progress.fire_downhill");
+  for (const PvdEntry& e : c.frames)
     if (e.file.empty() || e.file.find('/') != std::string::npos ||
         e.file.find('\\') != std::string::npos)
       r.fail(fmt::format("frame file name '{}' is not a plain file name", e.file));
-  }
-  c.monitors = r.text("monitors");
-  r.expect_end();
-  return c;
 }
 
 }  // namespace
@@ -250,12 +212,14 @@ std::uint64_t model_hash(const Model& model) {
 }
 
 void write_checkpoint(const std::filesystem::path& path, const Checkpoint& checkpoint) {
-  const std::string body = payload(checkpoint);
+  Writer w;
+  w.put(checkpoint);
+  const std::string& body = w.bytes();
   Writer header;
   header.raw(kMagic, sizeof kMagic);
-  header.u64(kVersion);
-  header.u64(kByteOrderMark);
-  header.u64(body.size());
+  header.put(kVersion);
+  header.put(kByteOrderMark);
+  header.put(std::uint64_t(body.size()));
   const std::uint64_t sum = fnv1a(body);
   write_file_atomically(path, [&](std::ostream& o) {
     o.write(header.bytes().data(), std::streamsize(header.bytes().size()));
@@ -295,7 +259,11 @@ Checkpoint parse_checkpoint(std::string_view bytes, const std::string& name) {
     throw CheckpointError(
         fmt::format("checkpoint {} is corrupt: its checksum does not match its contents", name));
   Reader r(body, kHeaderBytes, name);
-  return parse_payload(r);
+  Checkpoint c;
+  r.get(c, "");
+  r.expect_end();
+  check_fields(r, c);
+  return c;
 }
 
 Checkpoint read_checkpoint(const std::filesystem::path& path) {

@@ -9,6 +9,7 @@
 #include <string_view>
 #include <vector>
 
+#include "phymul/fem.hpp"
 #include "phymul/model.hpp"
 #include "phymul/simulator.hpp"
 #include "phymul/vtk.hpp"
@@ -34,6 +35,7 @@ struct Checkpoint {
   double next_frame = 0.0;         // s, dynamic mode: time of the next regular frame
   std::vector<PvdEntry> frames;    // frames written so far (their files are in the directory)
   std::string monitors;            // monitors.csv so far, header included
+  fem::SolveState newton;          // a static Newton run (solver: newton): where it stands
 };
 
 // The checkpoint's name in an output directory.

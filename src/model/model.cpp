@@ -260,7 +260,16 @@ State make_state(const Model& model) {
   init_rigid_states(model, s);
   s.contact_force.assign(model.obstacles.size(), Vec3::Zero());
   s.pair_contact_force.assign(model.contact_pairs.size(), Vec3::Zero());
+  if (!model.obstacles.empty()) s.obstacle_touching.assign(model.rest_position.size(), -1);
+  s.pair_contacts.reserve(pair_contact_capacity(model));
   return s;
+}
+
+size_t pair_contact_capacity(const Model& model) {
+  size_t nodes = 0;
+  for (const ContactPair& pair : model.contact_pairs)
+    nodes += pair.nodes[0].size() + pair.nodes[1].size();
+  return nodes * size_t(kPairContactSweeps);
 }
 
 }  // namespace phymul

@@ -8,9 +8,7 @@
 #include <map>
 #include <stdexcept>
 
-#include "io/checkpoint.hpp"
-#include "io/results.hpp"
-#include "phymul/simulator.hpp"
+#include "solver/run_checkpoint.hpp"
 
 namespace phymul {
 namespace {
@@ -171,14 +169,14 @@ void sum_reactions(const Model& model, const fem::Problem& problem, const fem::R
   for (const Vec3& f : problem.nodal_force) report.applied_load += load_factor * f;
 }
 
-void refuse_checkpoints(const RunOptions& options) {
-  if (options.resume)
-    throw std::invalid_argument(
-        "--resume: a static Newton run (solver: newton) keeps no checkpoint; run it again");
-  if (options.checkpoint_every.steps > 0 || options.checkpoint_every.time > 0.0)
-    throw std::invalid_argument(
-        "--checkpoint-every: a static Newton run (solver: newton) keeps no checkpoint; its load "
-        "steps are written as frames as they converge");
+// The fem state a resume starts from must be of this problem's size.
+void check_solve_state(const fem::SolveState& state, const Model& model, const Scene& scene,
+                       const RunOptions& options) {
+  if (state.load_steps_done < 1 || state.displacement.size() != 3 * model.rest_position.size())
+    throw CheckpointError(fmt::format(
+        "cannot resume in {}: the checkpoint holds no Newton solve of the model compiled from {} "
+        "(it was written by a relaxation run, another phymul, or is damaged); start a new run",
+        options.output_dir.string(), scene.file.string()));
 }
 
 fem::Result solve(const Scene& scene, const fem::Problem& problem) {
@@ -194,10 +192,21 @@ fem::Result solve(const Scene& scene, const fem::Problem& problem) {
 }  // namespace
 
 RunReport run_newton(const Scene& scene, const RunOptions& options) {
-  refuse_checkpoints(options);
+  if (options.checkpoint_every.time > 0)
+    throw std::invalid_argument(
+        "--checkpoint-every: a static Newton run counts Newton iterations, not simulated time; "
+        "give a number of steps, e.g. '--checkpoint-every 10 steps' (it checkpoints at the end "
+        "of a load step once that many iterations have passed)");
+  const std::uint64_t scene_hash = file_hash(scene.file);
+  const std::optional<Checkpoint> from = checkpoint_to_resume(scene, options, scene_hash);
   Simulator sim(compile_scene(scene));
   const Model& model = sim.model();
   fem::Problem problem = newton_problem(scene, model);
+  if (from) {
+    check_checkpoint_model(*from, model, scene, options);
+    check_solve_state(from->newton, model, scene, options);
+    problem.resume_from = from->newton;
+  }
   std::filesystem::create_directories(options.output_dir);
   ResultWriter out(options.output_dir, scene.file.stem().string(), model, scene.output.vtk,
                    scene.output.format);
@@ -207,8 +216,10 @@ RunReport run_newton(const Scene& scene, const RunOptions& options) {
   report.load_steps = problem.load_steps;
   report.nodes = model.node_count();
   report.threads = omp_get_max_threads();
-  out.frame(sim);
-  out.monitor(sim);
+  start_or_restore(from ? &*from : nullptr, sim, out);
+  CheckpointWriter checkpoints{scene, options, scene_hash, model_hash(model)};
+  StopCheck stop_requested(options);
+  CheckpointClock clock(options.checkpoint_every, from ? from->newton.newton_iterations : 0, 0.0);
   const double duration = scene.simulation.duration;
   const auto start = std::chrono::steady_clock::now();
   problem.on_load_step = [&](const fem::LoadStepReport& r) {
@@ -218,8 +229,14 @@ RunReport run_newton(const Scene& scene, const RunOptions& options) {
     if (options.progress)
       std::fprintf(stderr, "load step %d of %d: %d Newton iterations, residual %.3g N\n", r.step,
                    r.steps, r.newton_iterations, r.residual);
-    return !interrupt_requested() &&
-           !(options.stop_after_steps > 0 && r.newton_iterations >= options.stop_after_steps);
+    if (r.step == r.steps) return true;  // nothing left to stop for
+    const bool stop = stop_requested(r.newton_iterations);
+    if (stop || clock.due(r.newton_iterations, 0.0, 0.0)) {
+      Checkpoint c;
+      c.newton = r.state;
+      checkpoints.save(std::move(c), sim, out);
+    }
+    return !stop;
   };
   const fem::Result result = solve(scene, problem);
   report.wall_time =
@@ -234,10 +251,8 @@ RunReport run_newton(const Scene& scene, const RunOptions& options) {
                 report);
   if (result.stopped) {
     report.status = "interrupted";
-    report.message = fmt::format(
-        "interrupted after load step {} of {}; its equilibrium is the last frame. A Newton run "
-        "keeps no checkpoint: run it again for the rest",
-        result.load_steps_done, problem.load_steps);
+    report.message = fmt::format("after load step {} of {}: {}", result.load_steps_done,
+                                 problem.load_steps, interrupted_message(options.output_dir));
   } else if (!result.converged) {
     report.status = "not-converged";
     report.message = fmt::format(
@@ -245,8 +260,10 @@ RunReport run_newton(const Scene& scene, const RunOptions& options) {
         "that the constraints hold the objects (a free rigid motion has no equilibrium)",
         result.message, result.load_steps_done, problem.load_steps);
   }
-  std::error_code ec;
-  std::filesystem::remove(checkpoint_path(options.output_dir), ec);
+  if (report.status != "interrupted") {
+    std::error_code ec;
+    std::filesystem::remove(checkpoint_path(options.output_dir), ec);
+  }
   out.finish(report);
   return report;
 }

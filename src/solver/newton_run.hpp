@@ -26,7 +26,8 @@ fem::Problem newton_problem(const Scene& scene, const Model& model);
 
 // run_scene for `solver: newton`: a frame and a monitors row at rest and after each
 // converged load step; report.json with the Newton iterations, the support reactions and
-// the applied load. Keeps no checkpoint (refuses --resume and --checkpoint-every). run_scene
+// the applied load. Checkpoints at the end of load steps (interrupted, or every so many
+// Newton iterations); a resumed run goes on from the last one as if never stopped. run_scene
 // has checked the output directory.
 RunReport run_newton(const Scene& scene, const RunOptions& options);
 

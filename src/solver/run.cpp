@@ -11,11 +11,9 @@
 #include <optional>
 #include <stdexcept>
 
-#include "io/checkpoint.hpp"
-#include "io/results.hpp"
 #include "io/units.hpp"
-#include "phymul/simulator.hpp"
 #include "solver/newton_run.hpp"
+#include "solver/run_checkpoint.hpp"
 
 namespace phymul {
 namespace {
@@ -27,13 +25,6 @@ extern "C" void on_interrupt_signal(int) { g_interrupt = 1; }
 
 // Thrown from the static relaxation's progress callback to stop it between iterations.
 struct Interrupted {};
-
-std::string interrupted_message(const std::filesystem::path& dir) {
-  return fmt::format(
-      "interrupted; the results up to the last step and a checkpoint are written (continue "
-      "with: phymul run --resume {})",
-      dir.string());
-}
 
 class ProgressLine {
  public:
@@ -60,27 +51,6 @@ class ProgressLine {
   std::chrono::steady_clock::time_point last_{};
 };
 
-// Decides when the next checkpoint is due; starts counting from where the run starts.
-class CheckpointClock {
- public:
-  CheckpointClock(const CheckpointInterval& every, long step, double time)
-      : every_(every), last_step_(step), next_time_(time + every.time) {}
-  bool due(long step, double time, double dt) {
-    bool due = every_.steps > 0 && step - last_step_ >= every_.steps;
-    if (every_.time > 0 && time >= next_time_ - 0.5 * dt) {
-      due = true;
-      while (next_time_ <= time + 0.5 * dt) next_time_ += every_.time;
-    }
-    if (due) last_step_ = step;
-    return due;
-  }
-
- private:
-  CheckpointInterval every_;
-  long last_step_;
-  double next_time_;
-};
-
 // What the two modes' loops share.
 struct Run {
   const Scene& scene;
@@ -89,35 +59,14 @@ struct Run {
   ResultWriter& out;
   RunReport& report;
   ProgressLine& progress;
-  std::uint64_t scene_hash, model_hash;
-  bool checkpoint_failed = false;
+  CheckpointWriter checkpoints;
+  StopCheck stop_requested;
 
   void save_checkpoint(long steps_done, double next_frame) {
     Checkpoint c;
-    c.scene_file = std::filesystem::absolute(scene.file).lexically_normal().string();
-    c.scene_hash = scene_hash;
-    c.model_hash = model_hash;
-    c.static_mode = sim.model().settings.mode == SolveMode::static_equilibrium;
-    c.dt = sim.dt();
-    c.state = sim.state();
-    c.load_time = sim.load_time();
-    c.static_progress = sim.static_progress();
     c.steps_done = steps_done;
     c.next_frame = next_frame;
-    c.frames = out.frame_list();
-    c.monitors = out.monitors_text();
-    // A checkpoint that cannot be written (disk full) must not cost the run its results.
-    try {
-      write_checkpoint(checkpoint_path(options.output_dir), c);
-    } catch (const std::exception& e) {
-      if (!checkpoint_failed)
-        std::fprintf(stderr, "warning: %s; the run goes on without a checkpoint\n", e.what());
-      checkpoint_failed = true;
-    }
-  }
-  bool stop_requested(long steps) const {
-    return interrupt_requested() ||
-           (options.stop_after_steps > 0 && steps >= options.stop_after_steps);
+    checkpoints.save(std::move(c), sim, out);
   }
 };
 
@@ -222,18 +171,6 @@ void run_dynamic(Run& run, const Checkpoint* from) {
   }
 }
 
-std::optional<Checkpoint> checkpoint_to_resume(const Scene& scene, const RunOptions& options,
-                                               std::uint64_t scene_hash) {
-  if (!options.resume) return std::nullopt;
-  Checkpoint c = read_checkpoint(checkpoint_path(options.output_dir));
-  if (c.scene_hash != scene_hash)
-    throw CheckpointError(fmt::format(
-        "cannot resume in {}: the scene file {} changed since the checkpoint was written "
-        "(recorded from {}); resuming needs the same scene, or start a new run",
-        options.output_dir.string(), scene.file.string(), c.scene_file));
-  return c;
-}
-
 }  // namespace
 
 CheckpointInterval parse_checkpoint_interval(const std::string& text) {
@@ -292,12 +229,13 @@ RunReport run_scene(const Scene& scene, const RunOptions& options) {
     throw std::invalid_argument(
         "--checkpoint-every: a static run counts relaxation iterations, not simulated time; "
         "give a number of steps, e.g. '--checkpoint-every 5000 steps'");
-  if (from && (from->model_hash != model_id || from->static_mode != static_mode ||
-               (static_mode && from->dt != sim.dt())))
+  if (from) check_checkpoint_model(*from, model, scene, options);
+  if (from && (from->static_mode != static_mode || (static_mode && from->dt != sim.dt())))
     throw CheckpointError(fmt::format(
-        "cannot resume in {}: the model compiled from {} differs from the checkpoint's (a mesh "
-        "or data file it reads changed?); start a new run",
-        options.output_dir.string(), scene.file.string()));
+        "cannot resume in {}: the checkpoint is of a {} run with dt {} s, this one {} with dt {} "
+        "s; start a new run",
+        options.output_dir.string(), from->static_mode ? "static" : "dynamic", from->dt,
+        static_mode ? "static" : "dynamic", sim.dt()));
   std::filesystem::create_directories(options.output_dir);
   ResultWriter out(options.output_dir, scene.file.stem().string(), model, scene.output.vtk,
                    scene.output.format);
@@ -309,15 +247,16 @@ RunReport run_scene(const Scene& scene, const RunOptions& options) {
   report.dt = sim.dt();
   report.stable_dt = sim.stable_dt();
   ProgressLine progress(options.progress);
-  Run run{scene, options, sim, out, report, progress, scene_hash, model_id};
+  Run run{scene,
+          options,
+          sim,
+          out,
+          report,
+          progress,
+          CheckpointWriter{scene, options, scene_hash, model_id},
+          StopCheck(options)};
   const auto start = std::chrono::steady_clock::now();
-  if (from) {
-    sim.restore(from->state, from->load_time, from->static_progress);
-    out.restore(from->frames, from->monitors);
-  } else {
-    out.frame(sim);
-    out.monitor(sim);
-  }
+  start_or_restore(from ? &*from : nullptr, sim, out);
   try {
     if (static_mode)
       run_static(run, from ? &*from : nullptr);

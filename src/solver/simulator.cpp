@@ -17,6 +17,7 @@
 #include "constraints/doubled.hpp"
 #include "forces/explicit_fem.hpp"
 #include "forces/forces.hpp"
+#include "model/state_fields.hpp"
 #include "phymul/thread_team.hpp"
 #include "solver/rigid.hpp"
 #include "solver/runaway_guard.hpp"
@@ -96,10 +97,7 @@ Simulator::Simulator(Model model) : model_(std::move(model)) {
   f_start_.assign(n, Vec3::Zero());
   if (model_.settings.integrator == Integrator::newton_cotes)  // see accelerations()
     scratch_.assign(n, Vec3::Zero());
-  if (!model_.obstacles.empty()) {
-    touching_.assign(n, -1);
-    contacts_.reserve(size_t(n) * model_.obstacles.size());
-  }
+  if (!model_.obstacles.empty()) contacts_.reserve(size_t(n) * model_.obstacles.size());
   contact_impulse_.assign(model_.obstacles.size(), Vec3::Zero());
   pair_impulse_.assign(model_.contact_pairs.size(), Vec3::Zero());
   if (!model_.contact_pairs.empty()) {
@@ -240,11 +238,17 @@ void Simulator::step_verlet(double h, double load_time) {
 // The contact stages' bookkeeping; the shape's motion over the step runs from the load time
 // of the current forces (load_time_) to the new one.
 ContactStep Simulator::begin_contact_step(double dt) {
-  std::fill(touching_.begin(), touching_.end(), -1);
+  std::fill(state_.obstacle_touching.begin(), state_.obstacle_touching.end(), -1);
   std::fill(contact_impulse_.begin(), contact_impulse_.end(), Vec3::Zero());
   std::fill(pair_impulse_.begin(), pair_impulse_.end(), Vec3::Zero());
-  return ContactStep{x_start_,         load_time_,        dt,           touching_,
-                     contact_impulse_, deformable_.get(), pair_impulse_};
+  return ContactStep{x_start_,
+                     load_time_,
+                     dt,
+                     state_.obstacle_touching,
+                     contact_impulse_,
+                     deformable_.get(),
+                     &state_.pair_contacts,
+                     pair_impulse_};
 }
 
 // Impulse over the step: the position stage's m dx / dt plus the velocity stage's m dv. At
@@ -514,7 +518,7 @@ double Simulator::max_residual_force() {
   find_obstacle_contacts();
   remove_volume_pressures(r, x_start_, /*on_free_axes=*/true, contacts_);
   remove_contact_forces(r);
-  if (deformable_) add_deformable_contact_forces(*deformable_, dt_, r);
+  add_deformable_contact_forces(state_.pair_contacts, dt_, r);
   double largest = 0.0;
   for (int i = 0; i < model_.node_count(); ++i) largest = std::max(largest, r[i].norm());
   return std::max(largest, rigid_residual(model_, state_));
@@ -567,7 +571,7 @@ void Simulator::find_obstacle_contacts() {
   for (const RigidObstacle& o : model_.obstacles) {
     auto add = [&](int i) {
       const SurfaceDistance d = obstacle_distance(o, state_.x[i], load_time_);
-      const bool moved = touching_[size_t(i)] == int(&o - model_.obstacles.data());
+      const bool moved = state_.obstacle_touching[size_t(i)] == int(&o - model_.obstacles.data());
       if (std::abs(d.distance) > kTouching && !moved) return;
       contacts_.push_back({i, o.keep_inside ? Vec3(-d.normal) : d.normal, o.friction});
     };
@@ -739,16 +743,11 @@ StaticResult Simulator::static_load_steps(const std::function<void(long, double)
   return total;
 }
 
-void Simulator::restore(State state, double load_time, const StaticProgress& progress) {
-  if (state.x.size() != state_.x.size() || state.v.size() != state_.v.size() ||
-      state.f.size() != state_.f.size() || state.rotation.size() != state_.rotation.size() ||
-      state.bodies.size() != state_.bodies.size())
-    throw std::invalid_argument(fmt::format(
-        "restore: the state has {} nodes, {} rotations and {} rigid bodies, the model {}, {} "
-        "and {}",
-        state.x.size(), state.rotation.size(), state.bodies.size(), state_.x.size(),
-        state_.rotation.size(), state_.bodies.size()));
-  state_ = std::move(state);
+void Simulator::restore(const State& state, double load_time, const StaticProgress& progress) {
+  const std::string mismatch = state_shape_mismatch(model_, state);
+  if (!mismatch.empty())
+    throw std::invalid_argument("restore: the state does not fit the model: " + mismatch);
+  assign_state(state_, state);
   load_time_ = load_time;
   static_progress_ = progress;
 }

@@ -1,0 +1,158 @@
+// Every scene in examples/ resumes bit for bit: run whole, then interrupted by a real SIGINT
+// part way and resumed, then killed by SIGKILL after a periodic checkpoint and resumed; each
+// time the frames, monitors.csv and report.json (wall-clock fields aside) are the
+// uninterrupted run's, byte for byte. Static runs are interrupted at every progress check (so
+// within load steps and between them). The signals come from this test while the run is held
+// stopped at a known step (--pause-after: SIGSTOP there), so that none arrives too late.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "io/checkpoint.hpp"
+#include "support/process.hpp"
+#include "support/results.hpp"
+
+namespace phymul {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::expect_same_results;
+using testing::read_text;
+using testing::TempDir;
+
+std::vector<std::string> example_scenes() {
+  std::vector<std::string> scenes;
+  const fs::path root = testing::source_dir() / "examples";
+  for (const auto& e : fs::recursive_directory_iterator(root))
+    if (e.path().extension() == ".yaml") scenes.push_back(fs::relative(e.path(), root).string());
+  std::sort(scenes.begin(), scenes.end());
+  return scenes;
+}
+
+long report_integer(const fs::path& dir, const std::string& key) {
+  std::smatch m;
+  const std::string text = read_text(dir / "report.json");
+  if (!std::regex_search(text, m, std::regex("\"" + key + "\": (-?[0-9]+)"))) return -1;
+  return std::stol(m[1]);
+}
+
+// Runs `phymul run -q args...`, held with SIGSTOP where --pause-after puts it, then sends it
+// `signal` (and SIGCONT); the exit status, or -signal when a signal ended it.
+int run_signalled(const std::vector<std::string>& args, int signal) {
+  std::vector<std::string> all{testing::cli(), "run", "-q"};
+  all.insert(all.end(), args.begin(), args.end());
+  const pid_t pid = fork();
+  if (pid == 0) {
+    std::vector<char*> argv;
+    for (std::string& a : all) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    execv(argv[0], argv.data());
+    _exit(127);
+  }
+  int status = 0;
+  waitpid(pid, &status, WUNTRACED);
+  if (WIFSTOPPED(status)) {
+    kill(pid, signal);
+    kill(pid, SIGCONT);
+    waitpid(pid, &status, 0);
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+}
+
+int run_plain(const std::string& args) {
+  const auto r = testing::run_command(testing::cli() + " run -q " + args);
+  if (r.exit_code != 0) ADD_FAILURE() << args << ":\n" << r.output;
+  return r.exit_code;
+}
+
+// Steps (dynamic), relaxation iterations (static) or Newton iterations the checkpoint is at.
+long progress_of(const Checkpoint& c) {
+  if (c.newton.load_steps_done > 0) return c.newton.newton_iterations;
+  if (c.static_mode) return c.static_progress.iterations + c.static_progress.step_iterations;
+  return c.steps_done;
+}
+
+class ResumeExample : public ::testing::TestWithParam<std::string> {
+ protected:
+  void SetUp() override {
+    scene_ = (testing::source_dir() / "examples" / GetParam()).string();
+    full_ = dir_.path() / "full";
+    ASSERT_EQ(run_plain(scene_ + " -o " + full_.string()), 0);
+    steps_ = report_integer(full_, "steps");
+    static_ = read_text(full_ / "report.json").find("\"mode\": \"static\"") != std::string::npos;
+    ASSERT_GT(steps_, 4) << "the example is too short to interrupt";
+  }
+  TempDir dir_;
+  std::string scene_;
+  fs::path full_;
+  long steps_ = 0;
+  bool static_ = false;
+};
+
+TEST_P(ResumeExample, InterruptedBySigintAndResumedWritesTheSameFiles) {
+  const fs::path part = dir_.path() / "sigint";
+  std::set<std::string> stops;  // static: where the interruptions fell
+  // Dynamic: one interruption, 40 % of the way. Static: one at every progress check.
+  long pause = static_ ? 1 : steps_ * 2 / 5;
+  for (int round = 0;; ++round) {
+    ASSERT_LT(round, 200) << "the run never ended";
+    std::vector<std::string> args{"--resume", part.string()};
+    if (round == 0) args = {scene_, "-o", part.string()};
+    args.insert(args.end(), {"--pause-after", std::to_string(pause)});
+    const int exit = run_signalled(args, SIGINT);
+    if (exit == 0) break;
+    ASSERT_EQ(exit, 130) << "round " << round;
+    const Checkpoint c = read_checkpoint(part / "checkpoint.bin");
+    EXPECT_GE(progress_of(c), pause);
+    if (!static_) {
+      EXPECT_EQ(c.steps_done, pause);
+      pause = steps_ + 1;  // no more
+      continue;
+    }
+    stops.insert(c.static_progress.step_iterations > 0 ? "within" : "between");
+    pause = progress_of(c) + 1;
+  }
+  if (static_) {
+    EXPECT_FALSE(stops.empty()) << "never interrupted";
+  }
+  expect_same_results(full_, part);
+}
+
+TEST_P(ResumeExample, KilledAfterAPeriodicCheckpointAndResumedWritesTheSameFiles) {
+  const fs::path part = dir_.path() / "sigkill";
+  // Static runs check (and so checkpoint) only every 256 relaxation iterations and at the
+  // end of load steps: every check writes one there.
+  const long every = static_ ? 1 : std::max(1L, steps_ / 4), pause = steps_ * 3 / 5;
+  const int exit =
+      run_signalled({scene_, "-o", part.string(), "--checkpoint-every",
+                     std::to_string(every) + " steps", "--pause-after", std::to_string(pause)},
+                    SIGKILL);
+  ASSERT_EQ(exit, -SIGKILL);
+  ASSERT_TRUE(fs::is_regular_file(part / "checkpoint.bin"));
+  const long at = progress_of(read_checkpoint(part / "checkpoint.bin"));
+  EXPECT_GT(at, 0);
+  EXPECT_LT(at, pause);  // the periodic one before the kill
+  ASSERT_EQ(run_plain("--resume " + part.string()), 0);
+  expect_same_results(full_, part);
+}
+
+INSTANTIATE_TEST_SUITE_P(Examples, ResumeExample, ::testing::ValuesIn(example_scenes()),
+                         [](const ::testing::TestParamInfo<std::string>& info) {
+                           std::string name = info.param;
+                           for (char& ch : name)
+                             if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+                           return name;
+                         });
+
+}  // namespace
+}  // namespace phymul
