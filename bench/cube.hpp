@@ -5,7 +5,7 @@
 
 #include <chrono>
 
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 
 namespace phymul::bench {
 

@@ -11,7 +11,7 @@
 
 #include "io/results.hpp"
 #include "phymul/prostate.hpp"
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 
 namespace {
 
@@ -23,7 +23,7 @@ void BM_Frame(benchmark::State& state) {
   const prostate::SceneSettings scene =
       prostate::dynamic_scene(options, 50e-6, prostate::Probe::rigid);
   Simulator sim(compile_scene(parse_scene(prostate::scene_text(options, scene), "bench.yaml")));
-  while (sim.state().time < 0.3) sim.step();  // the probe pushing: every field non-zero
+  while (sim.data().time < 0.3) sim.step();  // the probe pushing: every field non-zero
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / ("phymul_frame_bench_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);

@@ -25,9 +25,9 @@ struct Snapshot {
 Snapshot snapshot(Simulator& sim) {
   for (int s = 0; s < 40; ++s) sim.step();
   Snapshot snap;
-  snap.rotation = sim.state().rotation;
+  snap.rotation = sim.data().rotation;
   sim.step();
-  snap.x = sim.state().x;
+  snap.x = sim.data().x;
   return snap;
 }
 
@@ -38,20 +38,22 @@ struct PassInputs {
         snap(snapshot(sim)),
         m(sim.model().shape_memory[0]),
         rotation(snap.rotation),
-        f(snap.x.size()) {}
+        f(snap.x.size()),
+        blocks(size_t(m.plan.blocks())) {}
   void reset() {
     std::copy(snap.rotation.begin(), snap.rotation.end(), rotation.begin());
     std::fill(f.begin(), f.end(), Vec3::Zero());
   }
   template <class Pass>
   double run(Pass pass) {
-    return pass(m, sim.model().rest_position, snap.x, rotation, f);
+    return pass(m, sim.model().rest_position, snap.x, rotation, f, blocks);
   }
   Simulator sim;
   const Snapshot snap;
   const ShapeMemory& m;
   std::vector<Eigen::Quaterniond> rotation;
   std::vector<Vec3> f;
+  std::vector<double> blocks;  // energy per block of the plan
 };
 
 template <class Pass>

@@ -9,7 +9,7 @@
 #include <chrono>
 
 #include "phymul/prostate.hpp"
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 #include "thread_cpu_time.hpp"
 
 namespace {
@@ -26,7 +26,7 @@ void BM_ProstateStep(benchmark::State& state) {
   const prostate::SceneSettings scene = prostate::dynamic_scene(options, filling, probe);
   Simulator sim(compile_scene(parse_scene(prostate::scene_text(options, scene), "bench.yaml")));
   // Past the settling, into the probe's push (0.2 s of load time onwards).
-  while (sim.state().time < 0.3) sim.step();
+  while (sim.data().time < 0.3) sim.step();
   const auto start = std::chrono::steady_clock::now();
   const double cpu_start = thread_cpu_seconds();
   for (auto _ : state) sim.step();

@@ -64,7 +64,7 @@ void BM_ProstateKernel(benchmark::State& state) {
   Model model = compile_scene(parse_scene(prostate::scene_text(options, scene), "bench.yaml"));
   if (state.range(0) == 0) scalar_kernel_only(model);
   Simulator sim(std::move(model));
-  while (sim.state().time < 0.3) sim.step();  // past the settling, into the probe's push
+  while (sim.data().time < 0.3) sim.step();  // past the settling, into the probe's push
   bench::time_steps(state, sim);
 }
 BENCHMARK(BM_ProstateKernel)->Arg(1)->Arg(0)->Unit(benchmark::kMicrosecond);

@@ -11,7 +11,7 @@
 #include "phymul/model.hpp"
 #include "phymul/run.hpp"
 #include "phymul/scene.hpp"
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 #include "prostate_command.hpp"
 #include "truthcube_command.hpp"
 

@@ -13,7 +13,7 @@
 
 #include "phymul/prostate.hpp"
 #include "phymul/run.hpp"
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 #include "phymul/vtk.hpp"
 #include "pictures.hpp"
 

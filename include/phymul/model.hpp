@@ -1,19 +1,50 @@
-// Model (compiled once, read-only during a run) and State (what a step changes), after
-// MuJoCo's mjModel / mjData split. Node data are arrays over all nodes of all components.
+// Model: compiled once from a scene (or built from its parts), read-only during a run; what
+// a run changes is Data (data.hpp), after MuJoCo's mjModel / mjData split. Node data are
+// arrays over all nodes of all components.
 #pragma once
 
 #include <Eigen/Geometry>
 #include <array>
+#include <bit>
+#include <cassert>
+#include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "phymul/fem.hpp"
 #include "phymul/mesh.hpp"
-#include "phymul/parallel_plan.hpp"
-#include "phymul/row_subset.hpp"
 #include "phymul/scene.hpp"
 #include "phymul/schedule.hpp"
 
 namespace phymul {
+
+// A subset of the rows 0..n-1 of some per-row data, with membership and rank in O(1): one bit
+// a row and a count every 64 rows. Data that only some rows have (the normal pairs of flat
+// neighbourhoods, say) is then stored for those rows alone, at 1.5 bits a row for the rest.
+struct RowSubset {
+  std::vector<std::uint64_t> bits;  // bit k % 64 of word k / 64: row k is a member
+  std::vector<int> before;          // per word: members in the words before it
+
+  // Position of row k among the members (in row order), or -1 when it is not one.
+  int find(int k) const {
+    assert(k >= 0 && size_t(k) < 64 * bits.size());
+    const std::uint64_t word = bits[size_t(k) >> 6], bit = std::uint64_t(1) << (k & 63);
+    if (!(word & bit)) return -1;
+    return before[size_t(k) >> 6] + std::popcount(word & (bit - 1));
+  }
+};
+
+// Deterministic parallel scatter: items (memory nodes, elements) that add into the forces of
+// several nodes are cut into contiguous blocks, and the blocks coloured so that blocks of one
+// colour write disjoint nodes. A colour runs in parallel; every nodal sum then keeps one
+// order (colour, then item) whatever the number of threads.
+struct ParallelPlan {
+  std::vector<int> block_start;    // item ranges, blocks + 1 entries
+  std::vector<int> colour_start;   // ranges of colour_blocks, colours + 1 entries
+  std::vector<int> colour_blocks;  // block ids, by colour
+  int blocks() const { return int(block_start.size()) - 1; }
+};
 
 // Local shape memory of one elastic component (DESIGN 2.1): every node is pulled towards
 // an attraction position a = g + R c built from its neighbours, with f = K (a - x).
@@ -61,6 +92,9 @@ struct ShapeMemory {
 // hourglass control.
 struct ExplicitFem {
   std::string component;
+  // The object's law, E, nu and hexahedron: what the implicit solver (solver: newton) takes;
+  // TLED uses the Neo-Hookean moduli below.
+  fem::Material material;
   double mu = 0.0, kappa = 0.0;  // Pa
   int nodes_per_cell = 8;        // 8 (hexahedra) or 4 (tetrahedra)
   std::vector<int> cells;        // global node ids, nodes_per_cell per cell
@@ -81,18 +115,13 @@ struct VolumeConstraint {
   double target_at(double load_time) const {
     return target_schedule.empty() ? target_volume : target_schedule.at(load_time).x();
   }
-  // Scratch of the joint projection of surfaces sharing nodes (sized by finalize then only):
-  // w_i dV/dx_i per node of `nodes` at the projection's start.
-  mutable std::vector<Vec3> coupled_direction;
   // The gradient's gather (finalize): for nodes[k], the two other corners of each triangle
   // around it, in triangle order and the triangle's cyclic order, at
   // [incident_start[k], incident_start[k + 1]) of incident. Empty: the triangles' scatter.
   std::vector<int> incident_start;
   std::vector<std::array<int, 2>> incident;
-  // The velocity projection's 6 dV/dx per node of `nodes` (the joint one's, or this
-  // surface's alone where it shares no node), and the positions it was taken at (NaN until
-  // then): a step's last projection and the next step's first share them.
-  mutable std::vector<Vec3> coupled_gradient, coupled_at;
+  // (The velocity projection's gradient, kept for the next position projection at the same
+  // positions, is the Data's: VolumeCache.)
   // The nodes it shares with earlier constraints (finalize), where alone the joint
   // projection's products of two gradients are not zero: {l, local index here, local index
   // in volumes[l]}, by l then node.
@@ -153,6 +182,9 @@ struct ContactPair {
   std::array<int, 2> components{0, 0};
   std::array<std::vector<Triangle>, 2> faces;  // each component's boundary, global ids
   std::array<std::vector<int>, 2> nodes;       // each component's surface nodes, sorted
+  // m: penetrations deeper than this are not looked for (half the larger mean rest edge: a
+  // step moves a node by far less in any stable run). Set by finalize.
+  double margin = 0.0;
 };
 
 enum class ComponentKind { elastic, rigid, active };
@@ -245,13 +277,21 @@ struct Model {
   // position constraint holds it. The projection of global constraints moves nodes by it.
   std::vector<Vec3> inverse_mass;
   bool coupled_volumes = false;  // some node lies on two volume constraints (set by finalize)
-  // The joint velocity projection's Cholesky factor of G W G^T (sized by finalize), valid
-  // while every VolumeConstraint::coupled_at matches the positions.
-  mutable std::vector<double> coupled_factor;
-  mutable bool coupled_factor_valid = false;
-  // The joint projection's gradient scatter: 4 per node from its first 32-byte boundary
-  // (sized by finalize, coupled_scatter_size).
-  mutable std::vector<double> coupled_scatter;
+  // kg per node: the inertia the steps use. The masses, unless the settings scale them:
+  // static relaxation's fictitious masses (relaxation_mass_scaling) or the dynamics' mass
+  // scaling (mass_scaling_dt). Gravity keeps the true masses.
+  std::vector<double> inertia;
+  // The settings `inertia` and `inverse_mass` were derived for (finalize); make_data refuses
+  // a model whose settings changed since.
+  SolveMode finalized_mode = SolveMode::dynamic;
+  bool finalized_relaxation_mass_scaling = true;
+  std::optional<double> finalized_mass_scaling_dt;
+  // The runaway guard's yardsticks (solver/runaway_guard.hpp): per node its shortest rest
+  // edge where the guard watches it (infinity elsewhere), their smallest, and the diagonal of
+  // the rest bounding box (m).
+  std::vector<double> runaway_edge;
+  double shortest_runaway_edge = 0.0;
+  double size_scale = 1.0;
   Vec3 gravity = Vec3::Zero();  // m/s^2
   double damping = 0.0;         // 1/s
   SimulationSpec settings;
@@ -299,67 +339,19 @@ void add_fibres(Model& model, int component, const Vec3& direction, double stiff
 // Fibres along given polylines (global node ids of the component, in order).
 void add_fibre_polylines(Model& model, int component, const std::vector<std::vector<int>>& lines,
                          double stiffness, double max_contraction, Schedule activation);
-// Recomputes derived arrays (inverse_mass); call after the last add_*.
+// Recomputes what is derived from the rest (inverse masses, inertias for the settings' mass
+// scaling, rigid bodies, doubled groups, volume indexes, the runaway guard's edges); call
+// after the last add_* and again after changing the settings.
 void finalize(Model& model);
+// Whether finalize ran for the model as it stands (its settings included).
+bool finalized(const Model& model);
+
+// Per node, the Gershgorin row sum (N/m) of the elastic stiffness at rest (shape memory,
+// fibres, explicit finite elements): the stability estimate's and mass scaling's measure.
+std::vector<double> stiffness_row_sums(const Model& model);
 
 // A scene file's description into a model; semantic problems (a node set that selects no
 // node, a volume constraint on an open surface, ...) throw SceneError with their location.
 Model compile_scene(const Scene& scene);
-
-// Pose and momenta of a rigid body.
-struct RigidBodyState {
-  Vec3 center = Vec3::Zero();                  // m, centre of mass
-  Eigen::Quaterniond orientation{1, 0, 0, 0};  // principal frame -> world
-  Vec3 momentum = Vec3::Zero();                // kg m/s
-  Vec3 angular_momentum = Vec3::Zero();        // kg m^2/s, about the centre, world frame
-};
-
-// A node put back on the other side's surface of a contact pair by a step's contact stage:
-// what the velocity stage and a static residual read.
-struct PairContact {
-  int pair = 0, side = 0;  // the node belongs to component pair.components[side]
-  int node = 0;
-  Triangle triangle{};          // of the other side, global ids
-  Vec3 weights = Vec3::Zero();  // barycentric weights of the contact point
-  Vec3 normal = Vec3::UnitZ();  // unit, out of the other side
-  double impulse = 0.0;         // N s along normal on the node (minus it on the triangle)
-};
-// Position sweeps of the contact pairs' stage at most; they stop once no node is inside.
-inline constexpr int kPairContactSweeps = 4;
-
-// Everything a run changes that a later step reads: checkpoints save and restore it whole
-// (io/checkpoint.cpp visits every member, src/model/state_fields.hpp names them).
-struct State {
-  double time = 0.0;  // s
-  long step = 0;
-  std::vector<Vec3> x, v;                    // m, m/s
-  std::vector<Vec3> f;                       // N, every force but damping, at (x, time)
-  std::vector<Eigen::Quaterniond> rotation;  // per shape-memory node: last best-fit rotation
-  double shape_memory_energy = 0.0;          // J, sum of K |a - x|^2 / 2 at the last force pass
-
-  std::vector<RigidBodyState> bodies;  // per Model::rigid_bodies
-  // N, per rigid obstacle: the force it exerted on the body over the last step (its impulse
-  // over dt; zero before the first step).
-  std::vector<Vec3> contact_force;
-  // N, per contact pair: the force the second component exerted on the first over the last
-  // step.
-  std::vector<Vec3> pair_contact_force;
-  // Per node: the obstacle whose contact stage last moved it in the last step, or -1 (empty
-  // without obstacles): a node the volume projection then moved off by a hair still touches.
-  std::vector<int> obstacle_touching;
-  // The contact pairs' contacts of the last step, at most pair_contact_capacity(model) (so
-  // much is reserved: a step allocates nothing).
-  std::vector<PairContact> pair_contacts;
-};
-
-// The most contacts one step's contact-pair stage records.
-size_t pair_contact_capacity(const Model& model);
-
-State make_state(const Model& model);
-
-// Force (N) the obstacle exerts on the body: minus State::f, on the free axes, summed over the
-// nodes it acts on that touch its surface (within 1e-12 m) at State::time. Valid at
-// equilibrium only (after relax), where the contact force is all that balances them.
-Vec3 obstacle_force(const Model& model, const State& state, int obstacle);
 
 }  // namespace phymul

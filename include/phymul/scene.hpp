@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "phymul/fem.hpp"
 #include "phymul/mesh.hpp"
 #include "phymul/schedule.hpp"
 #include "phymul/vtk.hpp"
@@ -92,12 +93,8 @@ struct MeshSpec {
 // How an elastic component resists deformation: the paper's local shape memory, or explicit
 // finite elements (TLED: hexahedra with one point and hourglass control, or tetrahedra).
 enum class ElasticModel { shape_memory, fem };
-// The finite elements' law: compressible Neo-Hookean (TLED and Newton) or small-strain linear
-// elasticity (Newton only).
-enum class FemLaw { neo_hookean, linear };
-// The implicit solver's hexahedron (README "Validation"): mean dilatation (Q1/P0), or Wilson's
-// incompatible modes (CalculiX's C3D8I).
-enum class FemHexa { mean_dilatation, incompatible_modes };
+// The finite elements' law and the implicit solver's hexahedron are fem::Law (Neo-Hookean for
+// TLED and Newton, linear for Newton only) and fem::HexaElement (fem.hpp).
 
 struct MaterialSpec {
   ElasticModel model = ElasticModel::shape_memory;
@@ -106,13 +103,13 @@ struct MaterialSpec {
   double poisson = 0.0;    // in (-1, 0.5): fem, or the FEM the shape memory's K is calibrated on
   int calibration_axis = 2;  // shape memory with young: the compression axis (0 x, 1 y, 2 z)
   SourceLoc stiffness_loc, young_loc, poisson_loc, calibration_axis_loc;  // line 0 when absent
-  double hourglass = 0.3;            // fem hexahedra (TLED): hourglass over the shear stiffness
-  FemLaw law = FemLaw::neo_hookean;  // fem
-  SourceLoc law_loc;                 // of `law`; line 0 when absent
-  FemHexa hexa = FemHexa::mean_dilatation;  // fem hexahedra, Newton only
-  SourceLoc hexa_loc;                       // of `hexa`; line 0 when absent
-  std::optional<double> density;            // kg/m^3 (volumetric meshes)
-  std::optional<double> mass;               // kg, total, spread by lumped cell measure
+  double hourglass = 0.3;                // fem hexahedra (TLED): hourglass over the shear stiffness
+  fem::Law law = fem::Law::neo_hookean;  // fem
+  SourceLoc law_loc;                     // of `law`; line 0 when absent
+  fem::HexaElement hexa = fem::HexaElement::mean_dilatation;  // fem hexahedra, Newton only
+  SourceLoc hexa_loc;                                         // of `hexa`; line 0 when absent
+  std::optional<double> density;                              // kg/m^3 (volumetric meshes)
+  std::optional<double> mass;  // kg, total, spread by lumped cell measure
   FrameMode frame = FrameMode::polar;
   bool reaction = true;  // apply -f/n to the neighbours (momentum kept)
   SourceLoc loc;

@@ -3,6 +3,7 @@
 
 #include <span>
 
+#include "model/workspace.hpp"
 #include "phymul/model.hpp"
 
 namespace phymul {
@@ -10,10 +11,6 @@ namespace phymul {
 // Puts every prescribed axis exactly at rest position + displacement(load_time): fixed
 // nodes get their rest coordinates bit for bit.
 void apply_prescribed(const Model& model, std::span<Vec3> x, double load_time);
-
-// Indexes the triangles around each node of c (finalize), so that its gradient is gathered
-// node by node, in parallel, rather than scattered from the triangles.
-void index_volume_faces(VolumeConstraint& c);
 
 // Volume gradient dV/dx_i (m^2) of a closed surface, accumulated into grad (zeroed first on
 // the constraint's nodes).
@@ -31,26 +28,26 @@ double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_m
 
 // Every volume constraint at its target at load_time: one pass when the surfaces are
 // disjoint, Gauss-Seidel sweeps until all are within round-off when they share nodes.
-// start: within a step, the positions it began at; a disjoint surface whose velocity
-// projection kept its gradient there moves along that gradient (SHAKE's direction, which
-// saves a gradient pass) rather than along the one at x.
-void project_volumes(const Model& model, std::span<Vec3> x, double load_time,
+// work: the volume caches. start: within a step, the positions it began at; a disjoint
+// surface whose velocity projection kept its gradient there moves along that gradient (SHAKE's
+// direction, which saves a gradient pass) rather than along the one at x.
+void project_volumes(const Model& model, Workspace& work, std::span<Vec3> x, double load_time,
                      std::span<Vec3> scratch, std::span<const Vec3> start = {});
 
 // All position constraints in the DESIGN's order: prescribed, rigid obstacles (contact.hpp),
 // then volumes (a few Gauss-Seidel sweeps when surfaces share nodes), then doubled nodes
 // (doubled.hpp). Rigid bodies place their nodes before (solver/rigid.hpp).
-void apply_position_constraints(const Model& model, std::span<Vec3> x, double load_time,
-                                std::span<Vec3> scratch);
+void apply_position_constraints(const Model& model, Workspace& work, std::span<Vec3> x,
+                                double load_time, std::span<Vec3> scratch);
 // The same within a step: contacts with friction, recording what they moved (contact.hpp).
 struct ContactStep;
-void apply_position_constraints(const Model& model, std::span<Vec3> x, double load_time,
-                                std::span<Vec3> scratch, ContactStep& contact);
+void apply_position_constraints(const Model& model, Workspace& work, std::span<Vec3> x,
+                                double load_time, std::span<Vec3> scratch, ContactStep& contact);
 
 // Removes from the velocities their rate of change of each constrained volume, along the
 // same mass-weighted direction as the position projection (RATTLE's velocity stage), so
 // that the velocities are tangent to the constraint after the second half kick.
-void project_volume_velocities(const Model& model, std::span<const Vec3> x, std::span<Vec3> v,
-                               std::span<Vec3> scratch);
+void project_volume_velocities(const Model& model, Workspace& work, std::span<const Vec3> x,
+                               std::span<Vec3> v, std::span<Vec3> scratch);
 
 }  // namespace phymul

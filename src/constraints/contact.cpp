@@ -166,7 +166,7 @@ void apply_contacts(const Model& model, std::span<Vec3> x, double load_time, Con
 
 void apply_contact_velocities(const Model& model, std::span<const Vec3> x, std::span<Vec3> v,
                               double load_time, ContactStep& step) {
-  if (step.deformable)
+  if (!model.contact_pairs.empty() && step.pair_contacts)
     apply_deformable_contact_velocities(model, v, *step.pair_contacts, step.pair_impulse);
   if (model.obstacles.empty()) return;
   int placed = -1;  // the obstacle whose base and velocity are below
@@ -195,7 +195,7 @@ void apply_contact_velocities(const Model& model, std::span<const Vec3> x, std::
   }
 }
 
-Vec3 obstacle_force(const Model& model, const State& state, int obstacle) {
+Vec3 obstacle_force(const Model& model, const Data& state, int obstacle) {
   const RigidObstacle& o = model.obstacles.at(size_t(obstacle));
   Vec3 force = Vec3::Zero();
   auto add = [&](int i) {

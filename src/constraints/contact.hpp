@@ -4,7 +4,7 @@
 #include <span>
 #include <vector>
 
-#include "phymul/model.hpp"
+#include "phymul/data.hpp"
 
 namespace phymul {
 
@@ -40,8 +40,7 @@ struct ContactStep {
   std::span<int> touching;        // per node: the obstacle that last moved it this step, or -1
   std::span<Vec3> impulse;        // N s, per obstacle: momentum it gave the body this step
   // Contact between deformable components (deformable_contact.hpp), when the model has any:
-  // the stages' buffers and the contacts they record (State::pair_contacts).
-  struct DeformableContactWorkspace* deformable = nullptr;
+  // the contacts their stages record (Data::pair_contacts).
   std::vector<PairContact>* pair_contacts = nullptr;
   std::span<Vec3> pair_impulse;  // N s, per contact pair: momentum given to its first component
 };

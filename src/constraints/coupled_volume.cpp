@@ -8,6 +8,7 @@
 
 #include "constraints/volume_gather.hpp"
 #include "constraints/volume_lanes.hpp"
+#include "model/finalize.hpp"
 
 namespace phymul {
 namespace {
@@ -21,16 +22,19 @@ Vec3 free_axes(const Vec3& inverse_mass) {
   return (inverse_mass.array() > 0.0).cast<double>().matrix();
 }
 
-// The scratch finalize sizes (model.cpp, mark_coupled_volumes).
-bool usable(const Model& model) {
+// The scratch allocate_data sizes for a model with surfaces sharing nodes.
+bool usable(const Model& model, const Workspace& w) {
   if (model.volumes.empty() || model.volumes.size() > size_t(kMax)) return false;
-  if (model.coupled_factor.size() != size_t(kMax * kMax) ||
-      model.coupled_scatter.size() != coupled_scatter_size(model.inverse_mass.size()))
+  if (w.joint.factor.size() != size_t(kMax * kMax) ||
+      w.joint.scatter.size() != coupled_scatter_size(model.inverse_mass.size()) ||
+      w.volumes.size() != model.volumes.size())
     return false;
-  for (const VolumeConstraint& c : model.volumes)
-    if (c.coupled_direction.size() != c.nodes.size() ||
-        c.coupled_gradient.size() != c.nodes.size() || c.coupled_at.size() != c.nodes.size())
+  for (size_t k = 0; k < model.volumes.size(); ++k) {
+    const size_t n = model.volumes[k].nodes.size();
+    const VolumeCache& cache = w.volumes[k];
+    if (cache.direction.size() != n || cache.gradient.size() != n || cache.gradient_at.size() != n)
       return false;
+  }
   return true;
 }
 
@@ -55,9 +59,9 @@ double six_gradient(const Model& model, const VolumeConstraint& c, std::span<con
 
 #ifdef PHYMUL_VOLUME_AVX2
 // The scratch's first 32-byte boundary: node i's sum is the aligned register at 4 i.
-double* scatter_slots(const Model& model) {
-  const auto address = reinterpret_cast<std::uintptr_t>(model.coupled_scatter.data());
-  return model.coupled_scatter.data() + (32 - address % 32) % 32 / sizeof(double);
+double* scatter_slots(Workspace& w) {
+  const auto address = reinterpret_cast<std::uintptr_t>(w.joint.scatter.data());
+  return w.joint.scatter.data() + (32 - address % 32) % 32 / sizeof(double);
 }
 
 // 6 dV/dx of c summed at its nodes in the scratch, in the rotated lanes (z, x, y); returns
@@ -66,9 +70,8 @@ double* scatter_slots(const Model& model) {
 // own (the cross products' fourth lane is 0): a load of it always finds the last store of it
 // whole, which forwards; at the positions' 24-byte stride the stores overlapped the next
 // node's and each such load waited for them to retire (a fifth of the step, Intel).
-double rotated_six_gradient(const Model& model, const VolumeConstraint& c,
-                            std::span<const Vec3> x) {
-  double* __restrict sum = scatter_slots(model);
+double rotated_six_gradient(Workspace& w, const VolumeConstraint& c, std::span<const Vec3> x) {
+  double* __restrict sum = scatter_slots(w);
   const double* __restrict p = x.data()->data();
   for (int i : c.nodes) _mm256_store_pd(sum + 4 * size_t(i), _mm256_setzero_pd());
   __m256d volume = _mm256_setzero_pd();
@@ -93,15 +96,16 @@ double rotated_six_gradient(const Model& model, const VolumeConstraint& c,
 }
 
 // The per-node part of gradient_and_direction from the rotated sums, four lanes at once.
-double directions_from_rotated(const Model& model, const VolumeConstraint& c,
-                               std::span<const Vec3> x, std::span<Vec3> grad, bool keep) {
-  const double* __restrict sum = scatter_slots(model);
+double directions_from_rotated(const Model& model, Workspace& work, const VolumeConstraint& c,
+                               VolumeCache& cache, std::span<const Vec3> x, std::span<Vec3> grad,
+                               bool keep) {
+  const double* __restrict sum = scatter_slots(work);
   const int* __restrict nodes = c.nodes.data();
   const Vec3* __restrict w = model.inverse_mass.data();
   Vec3* __restrict g = grad.data();
-  Vec3* __restrict direction = c.coupled_direction.data();
-  Vec3* __restrict kept = c.coupled_gradient.data();
-  Vec3* __restrict at = c.coupled_at.data();
+  Vec3* __restrict direction = cache.direction.data();
+  Vec3* __restrict kept = cache.gradient.data();
+  Vec3* __restrict at = cache.gradient_at.data();
   const __m256d sixth = _mm256_set1_pd(1.0 / 6.0);
   __m256d product = _mm256_setzero_pd();
   const int n = int(c.nodes.size());
@@ -175,24 +179,26 @@ void subtract_along(const VolumeConstraint& c, double s, const Vec3* __restrict 
 }
 
 // At x, for c: 6 dV/dx at its own nodes into grad (node-indexed), its direction w dV/dx
-// into coupled_direction, and, with `keep`, the gradient and x into coupled_gradient,
-// coupled_at. Returns the sum of 6 dV/dx . d over its nodes; 6 V into six_volume.
-double gradient_and_direction(const Model& model, const VolumeConstraint& c,
-                              std::span<const Vec3> x, std::span<Vec3> grad, bool keep,
-                              double& six_volume) {
+// into the cache's direction, and, with `keep`, the gradient and x into its gradient and
+// gradient_at. Returns the sum of 6 dV/dx . d over its nodes; 6 V into six_volume.
+double gradient_and_direction(const Model& model, Workspace& work, const VolumeConstraint& c,
+                              VolumeCache& cache, std::span<const Vec3> x, std::span<Vec3> grad,
+                              bool keep, double& six_volume) {
 #ifdef PHYMUL_VOLUME_AVX2
   if (gathered(c)) {  // every corner is one of `nodes`: the scatter touches nothing else
-    six_volume = rotated_six_gradient(model, c, x);
-    return directions_from_rotated(model, c, x, grad, keep);
+    six_volume = rotated_six_gradient(work, c, x);
+    return directions_from_rotated(model, work, c, cache, x, grad, keep);
   }
+#else
+  (void)work;
 #endif
   six_volume = six_gradient(model, c, x, grad);
   const int* __restrict nodes = c.nodes.data();
   const Vec3* __restrict w = model.inverse_mass.data();
   const Vec3* __restrict g = grad.data();
-  Vec3* __restrict direction = c.coupled_direction.data();
-  Vec3* __restrict kept = c.coupled_gradient.data();
-  Vec3* __restrict at = c.coupled_at.data();
+  Vec3* __restrict direction = cache.direction.data();
+  Vec3* __restrict kept = cache.gradient.data();
+  Vec3* __restrict at = cache.gradient_at.data();
   double product = 0.0;
   const int n = int(c.nodes.size());
   for (int m = 0; m < n; ++m) {
@@ -205,26 +211,26 @@ double gradient_and_direction(const Model& model, const VolumeConstraint& c,
   return product;
 }
 
-// At x: every direction d_k = w dV_k/dx (into the constraint's coupled_direction), the
-// symmetric G W G^T (a_kl = dV_k/dx . d_l, zero but on the nodes two surfaces share) and,
-// given `volumes`, each V_k. One gradient pass per surface; `keep`: each 6 dV_k/dx and x
-// into the constraint's coupled_gradient, coupled_at.
-void linearise(const Model& model, std::span<const Vec3> x, std::span<Vec3> grad, Square& a,
-               Column* volumes, bool keep) {
+// At x: every direction d_k = w dV_k/dx (into the caches' direction), the symmetric
+// G W G^T (a_kl = dV_k/dx . d_l, zero but on the nodes two surfaces share) and, given
+// `volumes`, each V_k. One gradient pass per surface; `keep`: each 6 dV_k/dx and x into the
+// caches' gradient, gradient_at.
+void linearise(const Model& model, Workspace& w, std::span<const Vec3> x, std::span<Vec3> grad,
+               Square& a, Column* volumes, bool keep) {
   constexpr double kSixth = 1.0 / 6.0;
   const int n = int(model.volumes.size());
   for (int k = 0; k < n; ++k) {
     const VolumeConstraint& c = model.volumes[size_t(k)];
     double six_volume = 0.0;
-    a[size_t(k * kMax + k)] = kSixth * gradient_and_direction(model, c, x, grad, keep, six_volume);
+    a[size_t(k * kMax + k)] = kSixth * gradient_and_direction(model, w, c, w.volumes[size_t(k)], x,
+                                                              grad, keep, six_volume);
     if (volumes) (*volumes)[size_t(k)] = six_volume / 6.0;
     // grad is 6 dV_k/dx on c's nodes here, d_l is stored: the shared nodes, by l then node.
     for (int l = 0; l < k; ++l) a[size_t(k * kMax + l)] = a[size_t(l * kMax + k)] = 0.0;
     double product = 0.0;
     for (size_t s = 0; s < c.shared.size(); ++s) {
       const auto [l, here, there] = c.shared[s];
-      product += grad[c.nodes[size_t(here)]].dot(
-          model.volumes[size_t(l)].coupled_direction[size_t(there)]);
+      product += grad[c.nodes[size_t(here)]].dot(w.volumes[size_t(l)].direction[size_t(there)]);
       if (s + 1 == c.shared.size() || c.shared[s + 1][0] != l) {
         a[size_t(k * kMax + l)] = a[size_t(l * kMax + k)] = kSixth * product;
         product = 0.0;
@@ -236,10 +242,10 @@ void linearise(const Model& model, std::span<const Vec3> x, std::span<Vec3> grad
 // The linearisation the last velocity projection kept is still the one at x: the same
 // positions on every surface (a step's first projection, of the accelerations, comes at the
 // positions of the last one's, whatever was computed in between: a monitor's residual).
-bool kept_linearisation_at(const Model& model, std::span<const Vec3> x) {
-  if (!model.coupled_factor_valid) return false;
-  for (const VolumeConstraint& c : model.volumes)
-    if (!gradient_kept_at(c, x)) return false;
+bool kept_linearisation_at(const Model& model, const Workspace& w, std::span<const Vec3> x) {
+  if (!w.joint.factor_valid) return false;
+  for (size_t k = 0; k < model.volumes.size(); ++k)
+    if (!gradient_kept_at(model.volumes[k], w.volumes[k], x)) return false;
   return true;
 }
 
@@ -275,46 +281,26 @@ void solve(int n, const Square& l, Column& b) {
 }
 
 // field -= sum_k coefficient_k d_k.
-void move_along_directions(const Model& model, const Column& coefficient, std::span<Vec3> field) {
-  for (size_t k = 0; k < model.volumes.size(); ++k) {
-    const VolumeConstraint& c = model.volumes[k];
-    subtract_along(c, coefficient[k], c.coupled_direction.data(), nullptr, field.data());
-  }
+void move_along_directions(const Model& model, const Workspace& w, const Column& coefficient,
+                           std::span<Vec3> field) {
+  for (size_t k = 0; k < model.volumes.size(); ++k)
+    subtract_along(model.volumes[k], coefficient[k], w.volumes[k].direction.data(), nullptr,
+                   field.data());
+}
+
+// The factor of G W G^T at the positions the caches' gradient_at hold, for the velocity
+// projection that comes next at the same positions.
+bool keep_factor(Workspace& w, int n, Square& a) {
+  w.joint.factor_valid = false;
+  if (!cholesky(n, a)) return false;
+  std::copy(a.begin(), a.end(), w.joint.factor.begin());
+  w.joint.factor_valid = true;
+  return true;
 }
 
 }  // namespace
 
-void index_shared_volume_nodes(Model& model) {
-  for (size_t k = 0; k < model.volumes.size(); ++k) {
-    VolumeConstraint& c = model.volumes[k];
-    c.shared.clear();
-    for (size_t l = 0; l < k; ++l) {  // both sorted: a merge
-      const std::vector<int>& o = model.volumes[l].nodes;
-      for (size_t p = 0, q = 0; p < c.nodes.size() && q < o.size();) {
-        if (c.nodes[p] < o[q]) {
-          ++p;
-        } else if (o[q] < c.nodes[p]) {
-          ++q;
-        } else {
-          c.shared.push_back({int(l), int(p), int(q)});
-          ++p, ++q;
-        }
-      }
-    }
-  }
-}
-
-// The factor of G W G^T at the positions the constraints' coupled_at hold, for the velocity
-// projection that comes next at the same positions.
-bool keep_factor(const Model& model, int n, Square& a) {
-  model.coupled_factor_valid = false;
-  if (!cholesky(n, a)) return false;
-  std::copy(a.begin(), a.end(), model.coupled_factor.begin());
-  model.coupled_factor_valid = true;
-  return true;
-}
-
-bool project_coupled_volumes(const Model& model, std::span<Vec3> x, double load_time,
+bool project_coupled_volumes(const Model& model, Workspace& w, std::span<Vec3> x, double load_time,
                              std::span<Vec3> grad) {
   // Chord iterations on V_k(x0 + sum_j lambda_j d_j) = target_k with the Jacobian at x0,
   // G W G^T: exact to first order, so each iteration squares the relative error (1e-6 ->
@@ -329,11 +315,11 @@ bool project_coupled_volumes(const Model& model, std::span<Vec3> x, double load_
   // when that ratio predicts a landing, so a larger start error (a contact's, 1e-4) costs a
   // volume pass more rather than a gradient pass more.
   constexpr double kLastStep = 1e-7;
-  if (!usable(model)) return false;
+  if (!usable(model, w)) return false;
   const int n = int(model.volumes.size());
   Square a{};
   Column volumes{}, targets{}, residual{};
-  linearise(model, x, grad, a, &volumes, /*keep=*/true);
+  linearise(model, w, x, grad, a, &volumes, /*keep=*/true);
   auto worst_error = [&] {
     double worst = 0.0;
     for (int k = 0; k < n; ++k) {
@@ -344,18 +330,18 @@ bool project_coupled_volumes(const Model& model, std::span<Vec3> x, double load_
   };
   for (int k = 0; k < n; ++k) targets[size_t(k)] = model.volumes[size_t(k)].target_at(load_time);
   double worst = worst_error();
-  if (!keep_factor(model, n, a)) return worst <= kExact;
+  if (!keep_factor(w, n, a)) return worst <= kExact;
   if (worst <= kExact) return true;
   double previous = 0.0;  // the error before the last chord step; 0: none yet
   for (int it = 0; it < kMaxIterations; ++it) {
     Column step = residual;
     solve(n, a, step);
-    move_along_directions(model, step, x);
+    move_along_directions(model, w, step, x);
     const bool lands = previous == 0.0 || worst * (worst / previous) <= kExact;
     if (worst <= kLastStep && lands) {
       // Should it not land yet, the next steps are Newton's, with this linearisation.
-      linearise(model, x, grad, a, &volumes, /*keep=*/true);
-      if (!keep_factor(model, n, a)) return false;
+      linearise(model, w, x, grad, a, &volumes, /*keep=*/true);
+      if (!keep_factor(w, n, a)) return false;
     } else {
       for (int k = 0; k < n; ++k) volumes[size_t(k)] = volume(model.volumes[size_t(k)], x);
     }
@@ -366,38 +352,39 @@ bool project_coupled_volumes(const Model& model, std::span<Vec3> x, double load_
   return false;
 }
 
-bool project_coupled_volume_velocities(const Model& model, std::span<const Vec3> x,
+bool project_coupled_volume_velocities(const Model& model, Workspace& w, std::span<const Vec3> x,
                                        std::span<Vec3> v, std::span<Vec3> grad) {
   constexpr double kSixth = 1.0 / 6.0;
-  if (!usable(model)) return false;
+  if (!usable(model, w)) return false;
   const int n = int(model.volumes.size());
   Square a{};
-  if (kept_linearisation_at(model, x)) {
-    std::copy_n(model.coupled_factor.begin(), kMax * kMax, a.begin());
+  if (kept_linearisation_at(model, w, x)) {
+    std::copy_n(w.joint.factor.begin(), kMax * kMax, a.begin());
   } else {
-    linearise(model, x, grad, a, nullptr, /*keep=*/true);
-    if (!keep_factor(model, n, a)) return false;
+    linearise(model, w, x, grad, a, nullptr, /*keep=*/true);
+    if (!keep_factor(w, n, a)) return false;
   }
   Column rates{};  // dV_k/dt
   for (int k = 0; k < n; ++k) {
     const VolumeConstraint& c = model.volumes[size_t(k)];
-    rates[size_t(k)] = kSixth * local_dot(c, c.coupled_gradient.data(), v.data());
+    rates[size_t(k)] = kSixth * local_dot(c, w.volumes[size_t(k)].gradient.data(), v.data());
   }
   solve(n, a, rates);
   // v -= sum_k mu_k w dV_k/dx from the kept gradients: the directions' scratch may have been
   // overwritten since (the position projection, a residual's pressures).
   for (int k = 0; k < n; ++k) {
     const VolumeConstraint& c = model.volumes[size_t(k)];
-    subtract_along(c, rates[size_t(k)], c.coupled_gradient.data(), model.inverse_mass.data(),
-                   v.data());
+    subtract_along(c, rates[size_t(k)], w.volumes[size_t(k)].gradient.data(),
+                   model.inverse_mass.data(), v.data());
   }
   return true;
 }
 
 // A node against an obstacle may push along the contact normal with any force: that part of
 // its residual and of the gradients is left out of the least squares.
-void remove_contact_normals(const Model& model, std::span<const ObstacleContact> contact,
-                            std::span<const Vec3> r, Square& a, Column& balanced) {
+void remove_contact_normals(const Model& model, const Workspace& w,
+                            std::span<const ObstacleContact> contact, std::span<const Vec3> r,
+                            Square& a, Column& balanced) {
   const int n = int(model.volumes.size());
   for (const auto& [i, normal, friction] : contact) {
     std::array<double, kMax> along{};  // F_k . normal, F_k the free gradient part (over 6)
@@ -405,7 +392,7 @@ void remove_contact_normals(const Model& model, std::span<const ObstacleContact>
       const VolumeConstraint& c = model.volumes[size_t(k)];
       const auto at = std::lower_bound(c.nodes.begin(), c.nodes.end(), i);
       if (at != c.nodes.end() && *at == i)
-        along[size_t(k)] = c.coupled_direction[size_t(at - c.nodes.begin())].dot(normal);
+        along[size_t(k)] = w.volumes[size_t(k)].direction[size_t(at - c.nodes.begin())].dot(normal);
     }
     const double r_along = r[size_t(i)].dot(normal);
     for (int k = 0; k < n; ++k) {
@@ -415,22 +402,23 @@ void remove_contact_normals(const Model& model, std::span<const ObstacleContact>
   }
 }
 
-bool remove_coupled_volume_pressures(const Model& model, std::span<const Vec3> x, std::span<Vec3> r,
-                                     std::span<Vec3> grad, bool on_free_axes,
+bool remove_coupled_volume_pressures(const Model& model, Workspace& w, std::span<const Vec3> x,
+                                     std::span<Vec3> r, std::span<Vec3> grad, bool on_free_axes,
                                      std::span<const ObstacleContact> contact) {
   constexpr double kSixth = 1.0 / 6.0;
-  if (!usable(model)) return false;
+  if (!usable(model, w)) return false;
   const int n = int(model.volumes.size());
   Square a{};
   Column balanced{};
   // Between steps (a monitor's residual) the velocity projection has kept the gradients here.
-  const bool kept = kept_linearisation_at(model, x);
+  const bool kept = kept_linearisation_at(model, w, x);
   for (int k = 0; k < n; ++k) {
     const VolumeConstraint& c = model.volumes[size_t(k)];
     if (kept) {  // the same gradient, as six_gradient would leave it in grad
       for (const VolumeConstraint& other : model.volumes)
         for (int i : other.nodes) grad[i].setZero();
-      for (size_t m = 0; m < c.nodes.size(); ++m) grad[c.nodes[m]] = c.coupled_gradient[m];
+      for (size_t m = 0; m < c.nodes.size(); ++m)
+        grad[c.nodes[m]] = w.volumes[size_t(k)].gradient[m];
     } else {
       six_gradient(model, c, x, grad);
     }
@@ -438,7 +426,7 @@ bool remove_coupled_volume_pressures(const Model& model, std::span<const Vec3> x
     for (size_t m = 0; m < c.nodes.size(); ++m) {
       const int i = c.nodes[m];
       const Vec3 free_part = grad[i].cwiseProduct(free_axes(model.inverse_mass[size_t(i)]));
-      c.coupled_direction[m] = kSixth * (on_free_axes ? free_part : grad[i]);
+      w.volumes[size_t(k)].direction[m] = kSixth * (on_free_axes ? free_part : grad[i]);
       rg += free_part.dot(r[size_t(i)]);
     }
     balanced[size_t(k)] = kSixth * rg;
@@ -449,15 +437,15 @@ bool remove_coupled_volume_pressures(const Model& model, std::span<const Vec3> x
         const int i = o.nodes[m];
         product += grad[i]
                        .cwiseProduct(free_axes(model.inverse_mass[size_t(i)]))
-                       .dot(o.coupled_direction[m]);
+                       .dot(w.volumes[size_t(l)].direction[m]);
       }
       a[size_t(k * kMax + l)] = a[size_t(l * kMax + k)] = kSixth * product;
     }
   }
-  if (on_free_axes) remove_contact_normals(model, contact, r, a, balanced);
+  if (on_free_axes) remove_contact_normals(model, w, contact, r, a, balanced);
   if (!cholesky(n, a)) return false;
   solve(n, a, balanced);
-  move_along_directions(model, balanced, r);
+  move_along_directions(model, w, balanced, r);
   return true;
 }
 

@@ -4,33 +4,24 @@
 
 #include <span>
 
+#include "model/workspace.hpp"
 #include "phymul/model.hpp"
 
 namespace phymul {
-
-// Most constraints the joint projection takes: its n x n system lives on the stack.
-inline constexpr int kMaxJointVolumes = 16;
-
-// Lists in each VolumeConstraint::shared the nodes it shares with the earlier ones (finalize).
-void index_shared_volume_nodes(Model& model);
-
-// The joint gradient scatter's length for a model of `nodes` nodes: an aligned 32-byte slot
-// per node, and the three doubles it may take to reach the first 32-byte boundary.
-inline size_t coupled_scatter_size(size_t nodes) { return 4 * nodes + 3; }
 
 // Moves the nodes by x + sum_j lambda_j w dV_j/dx (the gradients at the start, as the single
 // surface's projection) with the lambdas that put every volume at its target at load_time,
 // to 1e-13 relative or round-off. Returns false, having moved nothing or moved towards the
 // targets, when it cannot: more than kMaxJointVolumes constraints, directions not sized by
-// finalize, a surface that cannot change its volume, dependent gradients or no convergence.
+// allocate_data, a surface that cannot change its volume, dependent gradients or no convergence.
 // The caller's Gauss-Seidel sweeps then finish (and report a stuck surface).
-bool project_coupled_volumes(const Model& model, std::span<Vec3> x, double load_time,
-                             std::span<Vec3> grad);
+bool project_coupled_volumes(const Model& model, Workspace& work, std::span<Vec3> x,
+                             double load_time, std::span<Vec3> grad);
 
 // Takes out of v every volume's rate at once: solves (G W G^T) mu = G v and sets
 // v -= W G^T mu, after which every dV_k/dt is zero to round-off. Returns false (v untouched)
 // where project_coupled_volumes would.
-bool project_coupled_volume_velocities(const Model& model, std::span<const Vec3> x,
+bool project_coupled_volume_velocities(const Model& model, Workspace& work, std::span<const Vec3> x,
                                        std::span<Vec3> v, std::span<Vec3> grad);
 
 // Takes out of the residual r what the volumes' pressures balance together: the
@@ -38,8 +29,8 @@ bool project_coupled_volume_velocities(const Model& model, std::span<const Vec3>
 // removed along those free parts (on_free_axes) or the whole gradients (support reactions).
 // Returns false (r untouched) where project_coupled_volumes would.
 // contact: nodes against an obstacle with its normal there (on_free_axes only).
-bool remove_coupled_volume_pressures(const Model& model, std::span<const Vec3> x, std::span<Vec3> r,
-                                     std::span<Vec3> grad, bool on_free_axes,
+bool remove_coupled_volume_pressures(const Model& model, Workspace& work, std::span<const Vec3> x,
+                                     std::span<Vec3> r, std::span<Vec3> grad, bool on_free_axes,
                                      std::span<const ObstacleContact> contact = {});
 
 }  // namespace phymul

@@ -38,13 +38,6 @@ Vec3 closest_barycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3
 
 namespace {
 
-double mean_edge(const std::vector<Triangle>& faces, const std::vector<Vec3>& x) {
-  double sum = 0.0;
-  for (const Triangle& t : faces)
-    sum += (x[t[1]] - x[t[0]]).norm() + (x[t[2]] - x[t[1]]).norm() + (x[t[0]] - x[t[2]]).norm();
-  return faces.empty() ? 0.0 : sum / (3.0 * double(faces.size()));
-}
-
 // Area-weighted vertex normals of a closed surface: a smooth outward field whose sign test
 // is right at edges and corners too, where a single face normal is not.
 void vertex_normals(const std::vector<Triangle>& faces, const std::vector<int>& nodes,
@@ -64,7 +57,7 @@ struct Penetration {
   Vec3 weights = Vec3::Zero(), normal = Vec3::Zero();
 };
 
-Penetration find_penetration(const ContactPair& pair, int other, const TriangleHash& hash,
+Penetration find_penetration(const ContactPair& pair, int other, TriangleHash& hash,
                              const std::vector<Vec3>& vertex_normal, std::span<const Vec3> x,
                              const Vec3& p, double margin) {
   const std::vector<Triangle>& faces = pair.faces[size_t(other)];
@@ -107,25 +100,9 @@ double along(const Vec3& inverse_mass, const Vec3& n) {
 
 }  // namespace
 
-void DeformableContactWorkspace::prepare(const Model& model) {
-  hashes.resize(model.contact_pairs.size());
-  margin.assign(model.contact_pairs.size(), 0.0);
-  vertex_normal.assign(model.rest_position.size(), Vec3::Zero());
-  for (size_t k = 0; k < model.contact_pairs.size(); ++k) {
-    const ContactPair& pair = model.contact_pairs[k];
-    for (int side = 0; side < 2; ++side) {
-      hashes[k][size_t(side)].reserve(pair.faces[size_t(side)].size());
-    }
-    // Penetrations deeper than half a mean rest edge are not looked for: a step moves a node by
-    // far less than that in any stable run.
-    margin[k] = 0.5 * std::max(mean_edge(pair.faces[0], model.rest_position),
-                               mean_edge(pair.faces[1], model.rest_position));
-  }
-}
-
-void apply_deformable_contacts(const Model& model, std::span<Vec3> x,
-                               DeformableContactWorkspace& work, std::vector<PairContact>& contacts,
-                               double dt, std::span<Vec3> pair_impulse) {
+void apply_deformable_contacts(const Model& model, std::span<Vec3> x, Workspace& work,
+                               std::vector<PairContact>& contacts, double dt,
+                               std::span<Vec3> pair_impulse) {
   contacts.clear();
   for (int sweep = 0; sweep < kPairContactSweeps; ++sweep) {
     bool any = false;
@@ -133,21 +110,21 @@ void apply_deformable_contacts(const Model& model, std::span<Vec3> x,
       const ContactPair& pair = model.contact_pairs[k];
       for (int side = 0; side < 2; ++side) {
         const int other = 1 - side;
-        TriangleHash& hash = work.hashes[k][size_t(other)];
-        hash.build(pair.faces[size_t(other)], x, work.margin[k]);
+        TriangleHash& hash = work.pair_hashes[k][size_t(other)];
+        hash.build(pair.faces[size_t(other)], x, pair.margin);
         vertex_normals(pair.faces[size_t(other)], pair.nodes[size_t(other)], x, work.vertex_normal);
         // Only nodes within reach of the other surface's box can be inside it: most are not.
         Vec3 lo = x[size_t(pair.nodes[size_t(other)][0])], hi = lo;
         for (int i : pair.nodes[size_t(other)])
           lo = lo.cwiseMin(x[size_t(i)]), hi = hi.cwiseMax(x[size_t(i)]);
-        lo.array() -= work.margin[k];
-        hi.array() += work.margin[k];
+        lo.array() -= pair.margin;
+        hi.array() += pair.margin;
         for (int p : pair.nodes[size_t(side)]) {
           if ((x[size_t(p)].array() < lo.array()).any() ||
               (x[size_t(p)].array() > hi.array()).any())
             continue;
           const Penetration hit =
-              find_penetration(pair, other, hash, work.vertex_normal, x, x[p], work.margin[k]);
+              find_penetration(pair, other, hash, work.vertex_normal, x, x[p], pair.margin);
           if (hit.face < 0 || hit.depth >= 0.0) continue;
           const Triangle& t = pair.faces[size_t(other)][size_t(hit.face)];
           const Vec3& n = hit.normal;

@@ -7,7 +7,7 @@
 #include <span>
 #include <vector>
 
-#include "constraints/spatial_hash.hpp"
+#include "model/workspace.hpp"
 #include "phymul/model.hpp"
 
 namespace phymul {
@@ -15,25 +15,15 @@ namespace phymul {
 // Closest point of triangle (a, b, c) to p, as barycentric weights (sum 1, each >= 0).
 Vec3 closest_barycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
 
-// Buffers of the contact stages, sized once from the model: a step allocates nothing.
-// (The contacts found, which later steps read, are State::pair_contacts.)
-struct DeformableContactWorkspace {
-  std::vector<std::array<TriangleHash, 2>> hashes;  // per pair and side
-  std::vector<double> margin;                       // per pair, m: deepest penetration found
-  std::vector<Vec3> vertex_normal;                  // per node, area-weighted
-
-  void prepare(const Model& model);
-};
-
 // Position stage: Gauss-Seidel sweeps over the surface nodes of every pair; a node inside the
 // other surface (signed distance along the interpolated vertex normal below zero) and its
 // closest triangle move apart along that normal, in proportion to their inverse masses, until
 // it lies on the surface, recorded in `contacts` (cleared first; capacity
 // pair_contact_capacity). pair_impulse[k] gains the momentum (N s) given to the first
 // component of pair k.
-void apply_deformable_contacts(const Model& model, std::span<Vec3> x,
-                               DeformableContactWorkspace& work, std::vector<PairContact>& contacts,
-                               double dt, std::span<Vec3> pair_impulse);
+void apply_deformable_contacts(const Model& model, std::span<Vec3> x, Workspace& work,
+                               std::vector<PairContact>& contacts, double dt,
+                               std::span<Vec3> pair_impulse);
 
 // Velocity stage: removes the approaching normal velocity of each recorded node relative to
 // its triangle, momentum-conserving; adds the first components' m dv to pair_impulse.

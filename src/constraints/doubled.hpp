@@ -11,13 +11,6 @@
 
 namespace phymul {
 
-// Connected groups of Model::doubled_pairs (each sorted, groups by first id).
-std::vector<std::vector<int>> doubled_groups(const Model& model);
-
-// Fills Model::doubled with the groups that no rigid body moves and makes a held axis of a
-// member hold the whole group (inverse_mass). Called by finalize after the rigid bodies.
-void finalize_doubled(Model& model);
-
 // Mass-weighted mean over each group, per axis, written to every member: for positions,
 // velocities and accelerations alike. On an axis that holds the group the value of the
 // held member is taken (a prescribed displacement wins).

@@ -11,7 +11,7 @@
 #include "constraints/coupled_volume.hpp"
 #include "constraints/volume_gather.hpp"
 #include "constraints/volume_lanes.hpp"
-#include "phymul/thread_team.hpp"
+#include "model/thread_team.hpp"
 
 namespace phymul {
 namespace {
@@ -119,31 +119,6 @@ void weighted_volume_gradient(const VolumeConstraint& c, std::span<const Vec3> i
 
 }  // namespace
 
-void index_volume_faces(VolumeConstraint& c) {
-  c.incident_start.clear();
-  c.incident.clear();
-  const size_t n = c.nodes.size();
-  std::vector<int> start(n + 1, 0);
-  auto local = [&](int node) {
-    const auto at = std::lower_bound(c.nodes.begin(), c.nodes.end(), node);
-    return at != c.nodes.end() && *at == node ? size_t(at - c.nodes.begin()) : n;
-  };
-  for (const Triangle& t : c.triangles)
-    for (int node : t) {
-      const size_t k = local(node);
-      if (k == n) return;  // a corner outside `nodes`: keep the scatter
-      ++start[k + 1];
-    }
-  for (size_t k = 0; k < n; ++k) start[k + 1] += start[k];
-  std::vector<std::array<int, 2>> incident(size_t(start.back()));
-  std::vector<int> next(start.begin(), start.end() - 1);
-  for (const Triangle& t : c.triangles)  // in triangle order: the scatter's order of sums
-    for (int p = 0; p < 3; ++p)
-      incident[size_t(next[local(t[size_t(p)])]++)] = {t[size_t(p + 1) % 3], t[size_t(p + 2) % 3]};
-  c.incident_start = std::move(start);
-  c.incident = std::move(incident);
-}
-
 void volume_gradient(const VolumeConstraint& c, std::span<const Vec3> x, std::span<Vec3> grad) {
   // The factor 1/6 once per node rather than three times per triangle (a node has about six
   // triangles): 9 divisions per triangle saved; rounded once, the sum is as accurate.
@@ -190,12 +165,12 @@ double project_volume_along(const VolumeConstraint& c, std::span<Vec3> x, std::s
 
 // d = w dV/dx into grad from the gradient the last velocity projection kept (the same
 // expression as weighted_volume_gradient's).
-void kept_direction(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
-                    std::span<Vec3> grad) {
+void kept_direction(const VolumeConstraint& c, const VolumeCache& cache,
+                    std::span<const Vec3> inverse_mass, std::span<Vec3> grad) {
   const int n = int(c.nodes.size());
   for_each_index(n, team_pays(n, kParallelFrom), [&](int k) {
     const int i = c.nodes[size_t(k)];
-    grad[i] = Vec3(c.coupled_gradient[size_t(k)] / 6.0).cwiseProduct(inverse_mass[i]);
+    grad[i] = Vec3(cache.gradient[size_t(k)] / 6.0).cwiseProduct(inverse_mass[i]);
   });
 }
 
@@ -208,7 +183,7 @@ double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_m
   return project_volume_along(c, x, grad, target, relative_error_before);
 }
 
-void project_volumes(const Model& model, std::span<Vec3> x, double load_time,
+void project_volumes(const Model& model, Workspace& work, std::span<Vec3> x, double load_time,
                      std::span<Vec3> scratch, std::span<const Vec3> start) {
   // Surfaces sharing nodes: all multipliers at once (coupled_volume.hpp). Where that cannot
   // be used, each projection is exact for its own surface and they disturb each other, so
@@ -216,13 +191,15 @@ void project_volumes(const Model& model, std::span<Vec3> x, double load_time,
   // projection began (the cubic's constant term is that volume: the check is free).
   constexpr double kConverged = 1e-12;  // relative: 100 times below the 1e-10 promised
   constexpr int kMaxSweeps = 500;
-  if (model.coupled_volumes && project_coupled_volumes(model, x, load_time, scratch)) return;
+  if (model.coupled_volumes && project_coupled_volumes(model, work, x, load_time, scratch)) return;
   for (int sweep = 0; sweep < kMaxSweeps; ++sweep) {
     double worst = 0.0;
-    for (const VolumeConstraint& c : model.volumes) {
+    for (size_t k = 0; k < model.volumes.size(); ++k) {
+      const VolumeConstraint& c = model.volumes[k];
+      const VolumeCache& cache = work.volumes[k];
       double before = 0.0;
-      if (!model.coupled_volumes && !start.empty() && gradient_kept_at(c, start)) {
-        kept_direction(c, model.inverse_mass, scratch);
+      if (!model.coupled_volumes && !start.empty() && gradient_kept_at(c, cache, start)) {
+        kept_direction(c, cache, model.inverse_mass, scratch);
         project_volume_along(c, x, scratch, c.target_at(load_time), &before);
       } else {
         project_volume(c, model.inverse_mass, x, scratch, c.target_at(load_time), &before);
@@ -238,15 +215,15 @@ namespace {
 // One pass of the velocity projection on one constraint. Returns the removed rate dV/dt
 // relative to sum |g_i| |v_i|, for the sweeps' stopping test (0 without sweeps, which need no
 // square roots).
-double remove_volume_rate(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
-                          std::span<const Vec3> x, std::span<Vec3> v, std::span<Vec3> grad,
-                          bool sweeps) {
+double remove_volume_rate(const VolumeConstraint& c, VolumeCache& cache,
+                          std::span<const Vec3> inverse_mass, std::span<const Vec3> x,
+                          std::span<Vec3> v, std::span<Vec3> grad, bool sweeps) {
   // The gradient in the sums' pass: kept from the last projection at these positions (the
   // velocities' at a step's end, the accelerations' at the next one's start), or gathered
   // from the faces and kept.
-  const bool kept = gradient_kept_at(c, x);
+  const bool kept = gradient_kept_at(c, cache, x);
   const bool gather = !kept && gathered(c);
-  const bool keep = gather && c.coupled_gradient.size() == c.nodes.size();
+  const bool keep = gather && cache.gradient.size() == c.nodes.size();
   if (!kept && !gather) scatter_volume_gradient(c, x, grad);
   const FaceGather faces(c, x);
   const int n = int(c.nodes.size());
@@ -254,11 +231,11 @@ double remove_volume_rate(const VolumeConstraint& c, std::span<const Vec3> inver
   const auto [rate, weight, speed] = ordered_sums<3>(n, [&](int k, auto& sums) {
     const int i = c.nodes[size_t(k)];
     if (kept) {
-      grad[i] = c.coupled_gradient[size_t(k)] / 6.0;
+      grad[i] = cache.gradient[size_t(k)] / 6.0;
     } else if (gather) {
       const Vec3 six = faces.six_gradient_at(k);
       grad[i] = six / 6.0;
-      if (keep) c.coupled_gradient[size_t(k)] = six, c.coupled_at[size_t(k)] = x[size_t(i)];
+      if (keep) cache.gradient[size_t(k)] = six, cache.gradient_at[size_t(k)] = x[size_t(i)];
     }
     sums[0] += grad[i].dot(v[i]);
     sums[1] += grad[i].dot(grad[i].cwiseProduct(inverse_mass[i]));
@@ -275,18 +252,19 @@ double remove_volume_rate(const VolumeConstraint& c, std::span<const Vec3> inver
 
 }  // namespace
 
-void project_volume_velocities(const Model& model, std::span<const Vec3> x, std::span<Vec3> v,
-                               std::span<Vec3> grad) {
+void project_volume_velocities(const Model& model, Workspace& work, std::span<const Vec3> x,
+                               std::span<Vec3> v, std::span<Vec3> grad) {
   // Disjoint surfaces: one pass is exact. Coupled ones: one joint solve (coupled_volume.hpp),
   // else Gauss-Seidel on the multipliers until no constraint has a rate left above round-off.
   constexpr double kConverged = 1e-12;
   constexpr int kMaxSweeps = 200;
-  if (model.coupled_volumes && project_coupled_volume_velocities(model, x, v, grad)) return;
+  if (model.coupled_volumes && project_coupled_volume_velocities(model, work, x, v, grad)) return;
   for (int sweep = 0; sweep < kMaxSweeps; ++sweep) {
     double worst = 0.0;
-    for (const VolumeConstraint& c : model.volumes)
-      worst = std::max(
-          worst, remove_volume_rate(c, model.inverse_mass, x, v, grad, model.coupled_volumes));
+    for (size_t k = 0; k < model.volumes.size(); ++k)
+      worst =
+          std::max(worst, remove_volume_rate(model.volumes[k], work.volumes[k], model.inverse_mass,
+                                             x, v, grad, model.coupled_volumes));
     if (!model.coupled_volumes || worst <= kConverged) return;
   }
 }

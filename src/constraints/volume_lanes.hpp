@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <span>
 
+#include "model/workspace.hpp"
 #include "phymul/model.hpp"
 
 namespace phymul {
@@ -41,13 +42,14 @@ namespace phymul {
 }
 #endif
 
-// Whether c's kept velocity-projection gradient (coupled_gradient) was taken at x: every node
-// of c where coupled_at says. Branch-free within blocks of 32 nodes: after a step's
+// Whether c's kept velocity-projection gradient (cache.gradient) was taken at x: every node
+// of c where cache.gradient_at says. Branch-free within blocks of 32 nodes: after a step's
 // projection the first block already differs, between steps every node is compared.
-inline bool gradient_kept_at(const VolumeConstraint& c, std::span<const Vec3> x) {
-  if (c.coupled_at.size() != c.nodes.size()) return false;
+inline bool gradient_kept_at(const VolumeConstraint& c, const VolumeCache& cache,
+                             std::span<const Vec3> x) {
+  if (cache.gradient_at.size() != c.nodes.size()) return false;
   const int* __restrict nodes = c.nodes.data();
-  const Vec3* __restrict at = c.coupled_at.data();
+  const Vec3* __restrict at = cache.gradient_at.data();
   const int n = int(c.nodes.size());
 #ifdef PHYMUL_VOLUME_AVX2
   for (int begin = 0; begin < n; begin += 32) {

@@ -9,6 +9,7 @@
 
 #include "fem/constitutive.hpp"
 #include "fem/element.hpp"
+#include "model/parallel_plan.hpp"
 
 namespace phymul {
 namespace {
@@ -16,66 +17,6 @@ namespace {
 using Mat3 = Eigen::Matrix3d;
 template <int N>
 using Gradient = Eigen::Matrix<double, N, 3>;
-
-double cell_measure_at(std::span<const Vec3> rest, int first_node, const Cell& t) {
-  const Vec3& a = rest[first_node + t.nodes[0]];
-  return (rest[first_node + t.nodes[1]] - a)
-      .cross(rest[first_node + t.nodes[2]] - a)
-      .dot(rest[first_node + t.nodes[3]] - a);
-}
-
-void fail_cell(const std::string& component, int cell, double det) {
-  throw std::invalid_argument(fmt::format(
-      "object '{}': cell {} is inverted or degenerate for finite elements (Jacobian {:.3g})",
-      component, cell, det));
-}
-
-void add_hexa(ExplicitFem& fem, const std::string& component, int cell, const Cell& c,
-              int first_node, std::span<const Vec3> rest) {
-  static const Gradient<8> local = ::phymul::fem::hexa_local_gradient(Vec3::Zero());
-  Eigen::Matrix<double, 3, 8> X;
-  for (int a = 0; a < 8; ++a) X.col(a) = rest[first_node + c.nodes[a]];
-  const Mat3 jac = X * local;
-  const double det = jac.determinant();
-  if (!(det > 0.0)) fail_cell(component, cell, det);
-  const Gradient<8> G = local * jac.inverse();
-  // Flanagan-Belytschko: the hourglass base vectors made orthogonal to every linear field,
-  // so rigid motions and homogeneous strains feel no hourglass force.
-  // The corner signs are those of the centre gradient (each entry is +-1/8).
-  Eigen::Matrix<double, 8, 4> h;
-  for (int a = 0; a < 8; ++a) {
-    const double s0 = 8.0 * local(a, 0), s1 = 8.0 * local(a, 1), s2 = 8.0 * local(a, 2);
-    h.row(a) << s0 * s1, s1 * s2, s0 * s2, s0 * s1 * s2;
-  }
-  const Eigen::Matrix<double, 8, 4> gamma = h - G * (X * h);
-  const double volume = 8.0 * det;
-  for (int a = 0; a < 8; ++a) fem.cells.push_back(first_node + c.nodes[a]);
-  for (int a = 0; a < 8; ++a)
-    for (int d = 0; d < 3; ++d) fem.gradient.push_back(G(a, d));
-  for (int a = 0; a < 8; ++a)
-    for (int m = 0; m < 4; ++m) fem.gamma.push_back(gamma(a, m));
-  fem.volume.push_back(volume);
-  // Scaled by the shear modulus, not the bulk one: hourglass modes resisted with the bulk
-  // stiffness lock as nu -> 0.5 (8^3 cube, nu = 0.499: top force 1.67 times the reference).
-  fem.hourglass_stiffness.push_back(fem.mu * volume * G.squaredNorm() / 8.0);
-}
-
-void add_tetra(ExplicitFem& fem, const std::string& component, int cell, const Cell& c,
-               int first_node, std::span<const Vec3> rest) {
-  const Vec3 X0 = rest[first_node + c.nodes[0]];
-  Mat3 edges;
-  for (int a = 1; a < 4; ++a) edges.col(a - 1) = rest[first_node + c.nodes[a]] - X0;
-  const double det = edges.determinant();
-  if (!(det > 0.0)) fail_cell(component, cell, det);
-  Gradient<4> G;
-  G.bottomRows<3>() = edges.inverse();  // rows: gradients of the barycentric coordinates
-  G.row(0) = -G.bottomRows<3>().colwise().sum();
-  for (int a = 0; a < 4; ++a) fem.cells.push_back(first_node + c.nodes[a]);
-  for (int a = 0; a < 4; ++a)
-    for (int d = 0; d < 3; ++d) fem.gradient.push_back(G(a, d));
-  fem.volume.push_back(det / 6.0);
-  fem.hourglass_stiffness.push_back(0.0);
-}
 
 template <int N>
 Mat3 displacement_gradient(const ExplicitFem& fem, int e, std::span<const Vec3> rest,
@@ -136,86 +77,19 @@ InvertedCell first_inverted(const ExplicitFem& fem, std::span<const Vec3> rest,
 
 }  // namespace
 
-ExplicitFem build_explicit_fem(const std::string& component, const Mesh& mesh, int first_node,
-                               const MaterialSpec& material, std::span<const Vec3> rest) {
-  if (!(material.young > 0.0) || !(material.poisson > -1.0 && material.poisson < 0.5))
-    throw std::invalid_argument(fmt::format(
-        "object '{}': finite elements need young > 0 Pa and poisson in (-1, 0.5) (got {} Pa, {})",
-        component, material.young, material.poisson));
-  ExplicitFem fem;
-  fem.component = component;
-  fem.mu = material.young / (2.0 * (1.0 + material.poisson));
-  fem.kappa = material.young / (3.0 * (1.0 - 2.0 * material.poisson));
-  const bool hexa = !mesh.cells.empty() && mesh.cells[0].type == CellType::hexa;
-  fem.nodes_per_cell = hexa ? 8 : 4;
-  for (int e = 0; e < int(mesh.cells.size()); ++e) {
-    const Cell& c = mesh.cells[e];
-    if (hexa != (c.type == CellType::hexa) || !is_volumetric(c.type) || c.type == CellType::quad) {
-      throw std::invalid_argument(fmt::format(
-          "object '{}': finite elements take hexahedra alone, or tetrahedra and wedges (cell {} "
-          "is {}, cell 0 is {})",
-          component, e, cell_type_name(c.type), cell_type_name(mesh.cells[0].type)));
-    }
-    if (c.type == CellType::hexa) {
-      add_hexa(fem, component, e, c, first_node, rest);
-      fem.hourglass_stiffness.back() *= material.hourglass;
-    } else if (c.type == CellType::tetra) {
-      add_tetra(fem, component, e, c, first_node, rest);
-    } else {
-      for (Cell t : wedge_tetrahedra(c)) {
-        if (cell_measure_at(rest, first_node, t) < 0.0) std::swap(t.nodes[1], t.nodes[2]);
-        add_tetra(fem, component, e, t, first_node, rest);
-      }
-    }
-  }
-  plan_explicit_fem(fem);
-  return fem;
-}
-
-void plan_explicit_fem(ExplicitFem& fem) {
-  const int n = fem.nodes_per_cell;
-  fem.plan = plan_blocks(int(fem.volume.size()), [&fem, n](int e, const auto& visit) {
-    for (int a = 0; a < n; ++a) visit(fem.cells[size_t(e) * n + a]);
-  });
-}
-
 double add_explicit_fem_forces(const ExplicitFem& fem, std::span<const Vec3> rest,
-                               std::span<const Vec3> x, std::span<Vec3> f) {
+                               std::span<const Vec3> x, std::span<Vec3> f,
+                               std::span<double> blocks) {
   if (fem.nodes_per_cell == 8)
-    return run_coloured(fem.plan, [&](int e) { return cell_forces<8>(fem, e, rest, x, f); });
-  return run_coloured(fem.plan, [&](int e) { return cell_forces<4>(fem, e, rest, x, f); });
+    return run_coloured(fem.plan, blocks,
+                        [&](int e) { return cell_forces<8>(fem, e, rest, x, f); });
+  return run_coloured(fem.plan, blocks, [&](int e) { return cell_forces<4>(fem, e, rest, x, f); });
 }
 
 InvertedCell first_inverted_cell(const ExplicitFem& fem, std::span<const Vec3> rest,
                                  std::span<const Vec3> x) {
   return fem.nodes_per_cell == 8 ? first_inverted<8>(fem, rest, x)
                                  : first_inverted<4>(fem, rest, x);
-}
-
-void add_explicit_fem_rows(const ExplicitFem& fem, std::span<double> row) {
-  // |K_ab| <= (kappa + 4/3 mu) V |grad N_a|_1 |grad N_b|_1 for the material part at rest,
-  // plus the hourglass part k |gamma gamma^T|_ab.
-  const int n = fem.nodes_per_cell;
-  const double p_modulus = fem.kappa + 4.0 / 3.0 * fem.mu;
-  for (int e = 0; e < int(fem.volume.size()); ++e) {
-    const double* G = fem.gradient.data() + size_t(e) * n * 3;
-    double total = 0.0;
-    for (int b = 0; b < n; ++b)
-      total += std::abs(G[3 * b]) + std::abs(G[3 * b + 1]) + std::abs(G[3 * b + 2]);
-    for (int a = 0; a < n; ++a) {
-      const double own = std::abs(G[3 * a]) + std::abs(G[3 * a + 1]) + std::abs(G[3 * a + 2]);
-      double r = p_modulus * fem.volume[e] * own * total;
-      if (n == 8) {
-        const double* g = fem.gamma.data() + size_t(e) * 32;
-        for (int b = 0; b < 8; ++b) {
-          double gg = 0.0;
-          for (int m = 0; m < 4; ++m) gg += g[4 * a + m] * g[4 * b + m];
-          r += fem.hourglass_stiffness[e] * std::abs(gg);
-        }
-      }
-      row[fem.cells[size_t(e) * n + a]] += r;
-    }
-  }
 }
 
 }  // namespace phymul

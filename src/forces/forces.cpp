@@ -1,14 +1,16 @@
-#include "forces/forces.hpp"
+#include "phymul/forces.hpp"
 
 #include "forces/active_fibres.hpp"
 #include "forces/explicit_fem.hpp"
 #include "forces/pressure.hpp"
 #include "forces/shape_memory.hpp"
-#include "phymul/thread_team.hpp"
+#include "model/thread_team.hpp"
+#include "model/workspace.hpp"
 
 namespace phymul {
 
-void compute_forces(const Model& model, State& s, double load_time) {
+void compute_forces(const Model& model, Data& s, double load_time) {
+  Workspace& w = *s.work;
   const int n = model.node_count();
   {
     // Over the coordinates as one array: the lanes take a node's three products at once.
@@ -28,14 +30,17 @@ void compute_forces(const Model& model, State& s, double load_time) {
   for (const PressureLoad& load : model.pressures) add_pressure_forces(load, s.x, s.f, load_time);
   s.shape_memory_energy = 0.0;
   size_t first_rotation = 0;
-  for (const ShapeMemory& m : model.shape_memory) {
+  for (size_t k = 0; k < model.shape_memory.size(); ++k) {
+    const ShapeMemory& m = model.shape_memory[k];
     std::span<Eigen::Quaterniond> rotations(s.rotation.data() + first_rotation, m.nodes.size());
-    s.shape_memory_energy += add_shape_memory_forces(m, model.rest_position, s.x, rotations, s.f);
+    s.shape_memory_energy += add_shape_memory_forces(m, model.rest_position, s.x, rotations, s.f,
+                                                     w.shape_memory_blocks[k]);
     first_rotation += m.nodes.size();
   }
   for (const FibreBundle& fibres : model.fibres) add_fibre_forces(fibres, s.x, load_time, s.f);
-  for (const ExplicitFem& e : model.explicit_fem)
-    s.shape_memory_energy += add_explicit_fem_forces(e, model.rest_position, s.x, s.f);
+  for (size_t k = 0; k < model.explicit_fem.size(); ++k)
+    s.shape_memory_energy += add_explicit_fem_forces(model.explicit_fem[k], model.rest_position,
+                                                     s.x, s.f, w.fem_blocks[k]);
 }
 
 }  // namespace phymul

@@ -10,93 +10,10 @@
 #include <stdexcept>
 
 #include "forces/shape_memory_batch.hpp"
-#include "phymul/parallel_plan.hpp"
+#include "model/neighbourhood.hpp"
+#include "model/parallel_plan.hpp"
 
 namespace phymul {
-namespace {
-
-Vec3 centroid(std::span<const int> ids, std::span<const Vec3> p) {
-  Vec3 g = Vec3::Zero();
-  for (int j : ids) g += p[j];
-  return g / double(ids.size());
-}
-
-// Normal of an ordered ring around its centroid g: sum of consecutive cross products,
-// closed when the ring is a cycle. Consistent with the ring's orientation.
-Vec3 ring_normal(std::span<const int> ring, std::span<const Vec3> p, const Vec3& g) {
-  Vec3 n = Vec3::Zero();
-  for (size_t k = 0; k + 1 < ring.size(); ++k) n += (p[ring[k]] - g).cross(p[ring[k + 1]] - g);
-  if (ring.size() > 2) n += (p[ring.back()] - g).cross(p[ring.front()] - g);
-  return n;
-}
-
-Vec3 pair_normal(std::span<const int> nb, const std::array<int, 2>& pair, std::span<const Vec3> p,
-                 const Vec3& g) {
-  return (p[nb[pair[0]]] - g).cross(p[nb[pair[1]]] - g);
-}
-
-// Zero for the nodes without a normal pair (ShapeMemory::framed).
-double normal_weight(const ShapeMemory& m, int k) {
-  const int f = m.framed.find(k);
-  return f < 0 ? 0.0 : m.normal_weight[size_t(f)];
-}
-
-// Memory node k of a volume, a framed one: its callers read it only where the node has a
-// normal pair (weight > 0) or in frame mode, which frames every volume node.
-const std::array<int, 2>& frame_pair(const ShapeMemory& m, int k) {
-  const int f = m.framed.find(k);
-  assert(f >= 0 && "frame_pair of a node that has none");
-  return m.frame_pair[size_t(f)];
-}
-
-Vec3 neighbourhood_normal(const ShapeMemory& m, int k, std::span<const Vec3> p, const Vec3& g) {
-  const auto nb = m.neighbours.row(k);
-  return m.surface ? ring_normal(nb, p, g) : pair_normal(nb, frame_pair(m, k), p, g);
-}
-
-// The paper's frame: surface nodes from the normal and the first neighbour, interior
-// nodes by Gram-Schmidt on the rest-time most orthogonal pair of neighbour directions.
-Eigen::Matrix3d local_frame(const ShapeMemory& m, int k, std::span<const Vec3> p, const Vec3& g) {
-  const auto nb = m.neighbours.row(k);
-  Eigen::Matrix3d R;
-  if (m.surface) {
-    const Vec3 n = ring_normal(nb, p, g).normalized();
-    Vec3 e1 = p[nb[0]] - g;
-    e1 = (e1 - e1.dot(n) * n).normalized();
-    R << e1, n.cross(e1), n;
-  } else {
-    const std::array<int, 2>& pair = frame_pair(m, k);
-    const Vec3 e1 = (p[nb[pair[0]]] - g).normalized();
-    Vec3 u = p[nb[pair[1]]] - g;
-    const Vec3 e2 = (u - u.dot(e1) * e1).normalized();
-    R << e1, e2, e1.cross(e2);
-  }
-  return R;
-}
-
-// Most orthogonal pair of neighbour directions (largest |sin|), and that sine.
-std::pair<std::array<int, 2>, double> best_pair(std::span<const int> nb, std::span<const Vec3> p,
-                                                const Vec3& g) {
-  std::array<int, 2> best{0, 1};
-  double best_sin = -1.0;
-  for (int a = 0; a < int(nb.size()); ++a) {
-    const Vec3 da = (p[nb[a]] - g).normalized();
-    for (int b = a + 1; b < int(nb.size()); ++b) {
-      const double s = da.cross((p[nb[b]] - g).normalized()).norm();
-      if (s > best_sin + 1e-12) best_sin = s, best = {a, b};
-    }
-  }
-  return {best, best_sin};
-}
-
-Eigen::Matrix3d covariance_about(std::span<const int> nb, std::span<const Vec3> p, const Vec3& g) {
-  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-  for (int j : nb) C += (p[j] - g) * (p[j] - g).transpose();
-  return C;
-}
-
-}  // namespace
-
 namespace {
 
 // tr(S) I - S for the symmetric part of S: the Hessian of -trace(R^T A) in the body frame.
@@ -275,77 +192,6 @@ void extract_rotation(const Eigen::Matrix3d& A, Eigen::Quaterniond& q, int max_i
     if (converged(rotation_iteration(A, q))) return;
 }
 
-ShapeMemory build_shape_memory(const std::string& component, const Mesh& mesh, int first_node,
-                               const MaterialSpec& material, std::span<const Vec3> rest) {
-  ShapeMemory m;
-  m.component = component;
-  m.stiffness = material.stiffness;
-  m.frame = material.frame;
-  m.reaction = material.reaction;
-  m.surface = !mesh.volumetric();
-  const Adjacency local = m.surface ? ordered_one_rings(mesh) : edge_neighbours(mesh);
-  int rows = 0;  // exact sizes: arrays grown by doubling would keep up to twice their bytes
-  for (int i = 0; i < local.rows(); ++i) rows += local.row(i).empty() ? 0 : 1;
-  m.nodes.reserve(size_t(rows));
-  m.neighbours.offsets.reserve(size_t(rows) + 1);
-  m.neighbours.indices.reserve(local.indices.size());
-  for (int i = 0; i < local.rows(); ++i) {
-    if (local.row(i).empty()) continue;  // a node no cell uses carries no memory
-    m.nodes.push_back(first_node + i);
-    for (int j : local.row(i)) m.neighbours.indices.push_back(first_node + j);
-    m.neighbours.offsets.push_back(int(m.neighbours.indices.size()));
-  }
-  memorise_rest_shape(m, rest);
-  return m;
-}
-
-void memorise_rest_shape(ShapeMemory& m, std::span<const Vec3> rest) {
-  const int count = int(m.nodes.size());
-  // Normal weights and frame pairs are kept for the nodes that read them only
-  // (ShapeMemory::framed).
-  std::vector<char> framed(m.nodes.size(), 0);
-  m.normal_weight.clear();
-  m.frame_pair.clear();
-  for (int k = 0; k < count; ++k) {
-    const auto nb = m.neighbours.row(k);
-    const Vec3 G0 = centroid(nb, rest);
-    const auto [pair, sine] = nb.size() >= 2 ? best_pair(nb, rest, G0)
-                                             : std::pair<std::array<int, 2>, double>{{0, 0}, 0.0};
-    if (sine < 1e-3)
-      throw std::invalid_argument(fmt::format(
-          "component '{}': node {} has {} neighbour(s), all on one line; local shape memory "
-          "needs at least three neighbours not on a line",
-          m.component, m.nodes[k], nb.size()));
-    const Eigen::Matrix3d C = covariance_about(nb, rest, G0);
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
-    const bool flat = eig.eigenvalues()(0) < 1e-2 * eig.eigenvalues()(2);
-    const double weight = m.surface || flat ? C.trace() / double(nb.size()) : 0.0;
-    framed[size_t(k)] = m.frame == FrameMode::frame ? !m.surface : weight > 0.0;
-    if (!framed[size_t(k)]) continue;
-    m.normal_weight.push_back(weight);
-    if (!m.surface) m.frame_pair.push_back(pair);
-  }
-  m.normal_weight.shrink_to_fit();
-  m.frame_pair.shrink_to_fit();
-  m.framed = make_row_subset(framed);
-  // In polar mode the rest frame is the identity by construction (A0 is symmetric), and
-  // fit_neighbourhood recomputes c.
-  m.rest_offset.clear();
-  if (m.frame == FrameMode::frame) {
-    m.rest_offset.reserve(m.nodes.size());
-    for (int k = 0; k < count; ++k) {
-      const Vec3 G0 = centroid(m.neighbours.row(k), rest);
-      const Eigen::Matrix3d R0 = local_frame(m, k, rest, G0);
-      m.rest_offset.push_back(R0.transpose() * (rest[m.nodes[k]] - G0));
-    }
-  }
-  m.plan = plan_blocks(int(m.nodes.size()), [&m](int k, const std::function<void(int)>& visit) {
-    visit(m.nodes[k]);  // a node's pass writes it and its neighbours
-    for (int j : m.neighbours.row(k)) visit(j);
-  });
-  plan_polar_batches(m, rest);
-}
-
 Vec3 attraction_position(const ShapeMemory& m, int k, std::span<const Vec3> rest,
                          std::span<const Vec3> x, Eigen::Quaterniond& q) {
   if (m.frame == FrameMode::frame) {
@@ -389,12 +235,13 @@ namespace {
 // Batches of kShapeMemoryLanes first, then the block's other nodes: the order is the model's,
 // whatever the number of threads.
 double add_polar_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::span<const Vec3> x,
-                        std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f) {
+                        std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f,
+                        std::span<double> blocks) {
   // A memory whose plan changed after plan_polar_batches runs scalar, in node order.
   if (!polar_batches_planned(m))
-    return run_coloured(m.plan,
+    return run_coloured(m.plan, blocks,
                         [&](int k) { return add_polar_node_forces(m, k, rest, x, rotations, f); });
-  return run_coloured_blocks(m.plan, [&](int b) {
+  return run_coloured_blocks(m.plan, blocks, [&](int b) {
     double energy = 0.0;
     const int batched = m.batched_end[b], centred = m.centred_start[b],
               end = m.plan.block_start[b + 1];
@@ -413,8 +260,9 @@ double add_polar_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::s
 }
 
 double add_frame_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::span<const Vec3> x,
-                        std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f) {
-  return run_coloured(m.plan, [&](int k) {
+                        std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f,
+                        std::span<double> blocks) {
+  return run_coloured(m.plan, blocks, [&](int k) {
     const int i = m.nodes[k];
     const Vec3 pull = attraction_position(m, k, rest, x, rotations[k]) - x[i];
     f[i] += m.stiffness * pull;
@@ -427,9 +275,9 @@ double add_frame_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::s
 
 double add_shape_memory_forces(const ShapeMemory& m, std::span<const Vec3> rest,
                                std::span<const Vec3> x, std::span<Eigen::Quaterniond> rotations,
-                               std::span<Vec3> f) {
-  return m.frame == FrameMode::polar ? add_polar_forces(m, rest, x, rotations, f)
-                                     : add_frame_forces(m, rest, x, rotations, f);
+                               std::span<Vec3> f, std::span<double> blocks) {
+  return m.frame == FrameMode::polar ? add_polar_forces(m, rest, x, rotations, f, blocks)
+                                     : add_frame_forces(m, rest, x, rotations, f, blocks);
 }
 
 }  // namespace phymul

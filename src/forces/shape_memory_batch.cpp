@@ -148,20 +148,6 @@ PHYMUL_LANES Q turn(const Q& q, const V3& half) {
 
 }  // namespace
 
-bool is_centred(const ShapeMemory& m, int k, std::span<const Vec3> rest) {
-  const auto row = m.neighbours.row(k);
-  if (row.empty()) return false;
-  const Vec3& X = rest[m.nodes[k]];
-  Vec3 sum = Vec3::Zero();
-  double longest = 0.0;
-  for (int j : row) {
-    sum += rest[j] - X;
-    longest = std::max(longest, (rest[j] - X).norm());
-  }
-  return (sum / double(row.size())).norm() <=
-         64.0 * std::numeric_limits<double>::epsilon() * longest;
-}
-
 namespace {
 
 // N > 0: the loops unrolled for that neighbour count (a regular grid's 6); 0: any count.
@@ -272,82 +258,6 @@ double add_centred_forces(const ShapeMemory& m, const int* ks, int count, std::s
     begin = end;
   }
   return energy;
-}
-
-namespace {
-
-// The offsets of global id at which every centred node (m's centred ranges) finds its six
-// neighbours, if they are the same for all.
-std::optional<std::array<int, 6>> centred_stencil(const ShapeMemory& m) {
-  std::optional<std::array<int, 6>> stencil;
-  for (int b = 0; b < m.plan.blocks(); ++b)
-    for (int p = m.centred_start[b]; p < m.plan.block_start[b + 1]; ++p) {
-      const int k = m.batch_order[size_t(p)];
-      const auto row = m.neighbours.row(k);
-      if (row.size() != 6) return std::nullopt;
-      std::array<int, 6> offsets;
-      for (int j = 0; j < 6; ++j) offsets[size_t(j)] = row[size_t(j)] - m.nodes[k];
-      std::sort(offsets.begin(), offsets.end());
-      if (stencil && *stencil != offsets) return std::nullopt;
-      stencil = offsets;
-    }
-  return stencil;
-}
-
-}  // namespace
-
-bool polar_batches_planned(const ShapeMemory& m) {
-  return int(m.batched_end.size()) == m.plan.blocks() &&
-         int(m.centred_start.size()) == m.plan.blocks() && m.batch_order.size() == m.nodes.size();
-}
-
-void plan_polar_batches(ShapeMemory& m, std::span<const Vec3> rest) {
-  m.batch_order.clear();
-  m.batched_end.clear();
-  m.centred_start.clear();
-  if (m.frame != FrameMode::polar) {
-    m.batch_order.shrink_to_fit();
-    m.batched_end.shrink_to_fit();
-    m.centred_start.shrink_to_fit();
-    m.centred_on_stencil = false;
-    return;
-  }
-  m.batch_order.reserve(m.nodes.size());
-  m.batched_end.reserve(size_t(m.plan.blocks()));
-  m.centred_start.reserve(size_t(m.plan.blocks()));
-  std::vector<int> lanes, others, centred;
-  // Lanes share their neighbour count and whether they carry the normal pair (framed): the
-  // kernel reads the normal pair of every lane when its first lane has one (fit_batch).
-  auto count = [&m](int k) {
-    return 2 * int(m.neighbours.row(k).size()) + (m.framed.find(k) >= 0 ? 1 : 0);
-  };
-  for (int b = 0; b < m.plan.blocks(); ++b) {
-    lanes.clear();
-    others.clear();
-    centred.clear();
-    for (int k = m.plan.block_start[b]; k < m.plan.block_start[b + 1]; ++k) {
-      const bool batchable = int(m.neighbours.row(k).size()) <= kShapeMemoryMaxBatchedNeighbours;
-      (is_centred(m, k, rest) ? centred : batchable ? lanes : others).push_back(k);
-    }
-    std::stable_sort(lanes.begin(), lanes.end(), [&](int a, int c) { return count(a) < count(c); });
-    for (size_t s = 0; s < lanes.size();) {
-      size_t e = s;
-      while (e < lanes.size() && count(lanes[e]) == count(lanes[s])) ++e;
-      const size_t full = s + (e - s) / W * W;
-      m.batch_order.insert(m.batch_order.end(), lanes.begin() + long(s),
-                           lanes.begin() + long(full));
-      others.insert(others.end(), lanes.begin() + long(full), lanes.begin() + long(e));
-      s = e;
-    }
-    m.batched_end.push_back(int(m.batch_order.size()));
-    std::sort(others.begin(), others.end());
-    m.batch_order.insert(m.batch_order.end(), others.begin(), others.end());
-    m.centred_start.push_back(int(m.batch_order.size()));
-    m.batch_order.insert(m.batch_order.end(), centred.begin(), centred.end());
-  }
-  const auto stencil = centred_stencil(m);
-  m.centred_on_stencil = stencil.has_value();
-  m.centred_stencil = stencil.value_or(std::array<int, 6>{});
 }
 
 namespace {

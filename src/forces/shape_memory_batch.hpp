@@ -7,25 +7,10 @@
 #include <array>
 #include <span>
 
+#include "model/shape_memory_rest.hpp"
 #include "phymul/model.hpp"
 
 namespace phymul {
-
-inline constexpr int kShapeMemoryLanes = 4;
-// Neighbour counts above this go the scalar way (tetrahedral meshes reach about 20).
-inline constexpr int kShapeMemoryMaxBatchedNeighbours = 32;
-
-// Fills m.batch_order, m.batched_end and m.centred_start from m.plan and the rest positions
-// (polar mode; frame mode keeps them empty and every node scalar).
-void plan_polar_batches(ShapeMemory& m, std::span<const Vec3> rest);
-// Whether m's batch plan still matches its parallel plan (else its nodes go the scalar way,
-// in node order).
-bool polar_batches_planned(const ShapeMemory& m);
-
-// A memory node whose rest position is its rest neighbours' centroid to round-off (64
-// machine epsilons of its longest rest offset): its pull is the current neighbours' centroid
-// less its position, whatever the rotation, so neither fit nor rotation is needed.
-bool is_centred(const ShapeMemory& m, int k, std::span<const Vec3> rest);
 
 // The pass of a centred memory node k: the pull K (g - x_i) and, with m.reaction, -f_i / n
 // on each neighbour (the exact reaction: the rotation's term vanishes with the rest offset).

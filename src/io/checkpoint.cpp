@@ -19,23 +19,25 @@ namespace {
 // Integers are 64-bit and doubles their IEEE bits, in this machine's byte order (the mark
 // refuses a file from a machine of the other order).
 constexpr char kMagic[8] = {'P', 'H', 'Y', 'M', 'U', 'L', 'C', 'K'};
-constexpr std::uint64_t kVersion = 2;
+constexpr std::uint64_t kVersion = 3;
 constexpr std::uint64_t kByteOrderMark = 0x0102030405060708ULL;
 constexpr std::size_t kHeaderBytes = sizeof kMagic + 3 * sizeof(std::uint64_t);
 
 // Binary form of each member type; aggregates go member by member (fields::for_each), so the
-// file holds every member of Checkpoint and of the State inside it.
+// file holds every member of Checkpoint and of the Data inside it.
+// Fixed-size Eigen vectors and matrices (Vec3): their coefficients, in storage order.
 template <class T>
-concept EigenFixed = requires {
-  T::RowsAtCompileTime, T::ColsAtCompileTime;
-}
-&&(T::RowsAtCompileTime > 0 && T::ColsAtCompileTime > 0);
+inline constexpr bool is_eigen_fixed = false;
+template <class S, int R, int C, int O, int MR, int MC>
+inline constexpr bool is_eigen_fixed<Eigen::Matrix<S, R, C, O, MR, MC>> = R > 0 && C > 0;
 
 class Writer {
  public:
   template <class T>
   void put(const T& v) {
-    if constexpr (std::is_same_v<T, bool>) {
+    if constexpr (fields::is_workspace<T>) {
+      return;  // scratch no later step reads (model/workspace.hpp)
+    } else if constexpr (std::is_same_v<T, bool>) {
       put(std::uint64_t(v ? 1 : 0));
     } else if constexpr (std::is_enum_v<T>) {
       put(static_cast<long long>(v));
@@ -48,7 +50,7 @@ class Writer {
       out_.append(v);
     } else if constexpr (std::is_same_v<T, Eigen::Quaterniond>) {
       for (double c : {v.w(), v.x(), v.y(), v.z()}) put(c);
-    } else if constexpr (EigenFixed<T>) {
+    } else if constexpr (is_eigen_fixed<T>) {
       for (Eigen::Index k = 0; k < v.size(); ++k) put(double(v.data()[k]));
     } else if constexpr (fields::is_vector<T>) {
       put(std::uint64_t(v.size()));
@@ -78,7 +80,9 @@ class Reader {
   // Reads v's binary form; `field` names it in messages (a member's path).
   template <class T>
   void get(T& v, const std::string& field) {
-    if constexpr (std::is_same_v<T, bool>) {
+    if constexpr (fields::is_workspace<T>) {
+      return;  // the reader's Data keeps the workspace it was made with
+    } else if constexpr (std::is_same_v<T, bool>) {
       const std::uint64_t b = scalar<std::uint64_t>(field);
       if (b > 1) fail(fmt::format("'{}' is {}, expected 0 or 1", field, b));
       v = b == 1;
@@ -100,7 +104,7 @@ class Reader {
       double c[4];
       for (double& e : c) e = scalar<double>(field);
       v = Eigen::Quaterniond(c[0], c[1], c[2], c[3]);
-    } else if constexpr (EigenFixed<T>) {
+    } else if constexpr (is_eigen_fixed<T>) {
       for (Eigen::Index k = 0; k < v.size(); ++k) v.data()[k] = scalar<double>(field);
     } else if constexpr (fields::is_vector<T>) {
       v.resize(count(field));
@@ -147,28 +151,28 @@ class Reader {
 };
 
 // What the file's fields must agree on among themselves (the model's sizes are checked by
-// check_state_shape when the run has its model).
+// data_shape_mismatch when the run has its model).
 void check_fields(Reader& r, const Checkpoint& c) {
-  const State& s = c.state;
-  const size_t n = s.x.size();
+  const Data& d = c.data;
+  const size_t n = d.x.size();
   auto per_node = [&](size_t size, const char* field, bool may_be_empty) {
     if (size != n && !(may_be_empty && size == 0))
-      r.fail(fmt::format("'state.{}' has {} entries where the checkpoint has {} nodes", field, size,
+      r.fail(fmt::format("'data.{}' has {} entries where the checkpoint has {} nodes", field, size,
                          n));
   };
-  per_node(s.v.size(), "v", false);
-  per_node(s.f.size(), "f", false);
-  per_node(s.obstacle_touching.size(), "obstacle_touching", true);
+  per_node(d.v.size(), "v", false);
+  per_node(d.f.size(), "f", false);
+  per_node(d.obstacle_touching.size(), "obstacle_touching", true);
   auto non_negative = [&](long long v, const char* field) {
     if (v < 0) r.fail(fmt::format("'{}' is {}, expected 0 or more", field, v));
   };
-  non_negative(s.step, "state.step");
+  non_negative(d.step, "data.step");
   non_negative(c.steps_done, "steps_done");
-  const StaticProgress& p = c.static_progress;
-  non_negative(p.load_step, "static_progress.load_step");
-  non_negative(p.iterations, "static_progress.iterations");
-  non_negative(p.step_iterations, "static_progress.step_iterations");
-  non_negative(p.fire_downhill, "static_progress.fire_downhill");
+  const StaticProgress& p = d.static_progress;
+  non_negative(p.load_step, "data.static_progress.load_step");
+  non_negative(p.iterations, "data.static_progress.iterations");
+  non_negative(p.step_iterations, "data.static_progress.step_iterations");
+  non_negative(p.fire_downhill, "data.static_progress.fire_downhill");
   for (const PvdEntry& e : c.frames)
     if (e.file.empty() || e.file.find('/') != std::string::npos ||
         e.file.find('\\') != std::string::npos)

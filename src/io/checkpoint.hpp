@@ -9,9 +9,9 @@
 #include <string_view>
 #include <vector>
 
+#include "phymul/data.hpp"
 #include "phymul/fem.hpp"
 #include "phymul/model.hpp"
-#include "phymul/simulator.hpp"
 #include "phymul/vtk.hpp"
 
 namespace phymul {
@@ -22,20 +22,19 @@ class CheckpointError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// A run's checkpoint: its Data whole (every member but the workspace) and the bookkeeping of
+// the files written so far.
 struct Checkpoint {
   std::string scene_file;        // absolute path of the scene it was run from
   std::uint64_t scene_hash = 0;  // of the scene file's bytes
   std::uint64_t model_hash = 0;  // of the compiled model (mesh files included)
   bool static_mode = false;
-  double dt = 0.0;  // s
-  State state;
-  double load_time = 0.0;          // s, at which State::f was evaluated
-  StaticProgress static_progress;  // static mode
-  long steps_done = 0;             // dynamic mode: explicit steps taken
-  double next_frame = 0.0;         // s, dynamic mode: time of the next regular frame
-  std::vector<PvdEntry> frames;    // frames written so far (their files are in the directory)
-  std::string monitors;            // monitors.csv so far, header included
-  fem::SolveState newton;          // a static Newton run (solver: newton): where it stands
+  Data data;
+  long steps_done = 0;           // dynamic mode: explicit steps taken
+  double next_frame = 0.0;       // s, dynamic mode: time of the next regular frame
+  std::vector<PvdEntry> frames;  // frames written so far (their files are in the directory)
+  std::string monitors;          // monitors.csv so far, header included
+  fem::SolveState newton;        // a static Newton run (solver: newton): where it stands
 };
 
 // The checkpoint's name in an output directory.

@@ -4,17 +4,11 @@
 #pragma once
 
 #include "io/checkpoint.hpp"
-#include "model/state_fields.hpp"
+#include "model/data_fields.hpp"
 
 namespace phymul {
 
 namespace fields {
-
-template <>
-struct FieldNames<StaticProgress> {
-  static constexpr const char* names[] = {"load_step",        "iterations", "step_iterations",
-                                          "previous_kinetic", "fire_alpha", "fire_downhill"};
-};
 
 template <>
 struct FieldNames<PvdEntry> {
@@ -23,10 +17,9 @@ struct FieldNames<PvdEntry> {
 
 template <>
 struct FieldNames<Checkpoint> {
-  static constexpr const char* names[] = {
-      "scene_file", "scene_hash", "model_hash",      "static_mode", "dt",
-      "state",      "load_time",  "static_progress", "steps_done",  "next_frame",
-      "frames",     "monitors",   "newton"};
+  static constexpr const char* names[] = {"scene_file", "scene_hash", "model_hash", "static_mode",
+                                          "data",       "steps_done", "next_frame", "frames",
+                                          "monitors",   "newton"};
 };
 
 template <>

@@ -45,7 +45,7 @@ ResultWriter::ResultWriter(std::filesystem::path dir, std::string stem, const Mo
   for (int c : closed_components_) header += ",volume_" + model.components[c].name + "_m3";
   for (const RigidBody& b : model.rigid_bodies)  // how far each rigid body has moved
     header += ",displacement_" + model.components[b.component].name + "_m";
-  // The force each obstacle exerts on the body, averaged over the last step (State).
+  // The force each obstacle exerts on the body, averaged over the last step (Data).
   for (size_t k = 0; k < model.obstacles.size(); ++k) {
     const std::string& name = model.obstacles[k].name;
     const std::string label = name.empty() ? fmt::format("obstacle{}", k) : name;
@@ -67,7 +67,7 @@ ResultWriter::ResultWriter(std::filesystem::path dir, std::string stem, const Mo
 void ResultWriter::frame(Simulator& sim) {
   if (!vtk_) return;
   const Model& m = sim.model();
-  const State& s = sim.state();
+  const Data& s = sim.data();
   for (int i = 0; i < m.node_count(); ++i)
     for (int a = 0; a < 3; ++a) {
       displacement_[3 * i + a] = s.x[i][a] - m.rest_position[i][a];
@@ -116,7 +116,7 @@ std::string obstacle_frame_name(const std::string& stem, size_t frame) {
 void ResultWriter::write_obstacles(Simulator& sim, int frame) {
   if (!has_obstacles_) return;
   write_obstacle_surfaces(dir_ / obstacle_frame_name(stem_, size_t(frame)), sim.model().obstacles,
-                          sim.load_time(), sim.state().x, encoding_);
+                          sim.data().load_time, sim.data().x, encoding_);
 }
 
 // The obstacles' frames are named after the body's, at the same times, so their list
@@ -131,18 +131,18 @@ void ResultWriter::write_obstacle_pvd() {
 
 void ResultWriter::monitor(Simulator& sim) {
   const std::vector<double> volumes = sim.component_volumes();
-  std::string row = fmt::format("{},{},{},{}", sim.state().time, sim.kinetic_energy(),
-                                sim.state().shape_memory_energy, sim.max_residual_force());
+  std::string row = fmt::format("{},{},{},{}", sim.data().time, sim.kinetic_energy(),
+                                sim.data().shape_memory_energy, sim.max_residual_force());
   for (int c : closed_components_) row += fmt::format(",{}", volumes[c]);
   for (size_t b = 0; b < sim.model().rigid_bodies.size(); ++b)
     row += fmt::format(
-        ",{}", (sim.state().bodies[b].center - sim.model().rigid_bodies[b].rest_center).norm());
-  for (const Vec3& f : sim.state().contact_force)
+        ",{}", (sim.data().bodies[b].center - sim.model().rigid_bodies[b].rest_center).norm());
+  for (const Vec3& f : sim.data().contact_force)
     row += fmt::format(",{},{},{}", f.x(), f.y(), f.z());
-  for (const Vec3& f : sim.state().pair_contact_force)
+  for (const Vec3& f : sim.data().pair_contact_force)
     row += fmt::format(",{},{},{}", f.x(), f.y(), f.z());
   write_monitors(row + '\n');
-  monitored_time_ = sim.state().time;
+  monitored_time_ = sim.data().time;
 }
 
 void ResultWriter::write_monitors(const std::string& text) {

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "phymul/run.hpp"
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 #include "phymul/vtk.hpp"
 
 namespace phymul {

@@ -448,11 +448,12 @@ MaterialSpec SceneBuilder::material(SectionReader& reader) {
                           {"calibration_axis", &spec.calibration_axis_loc}})
     *loc = reader.value_loc(key).value_or(SourceLoc{});
   reader.read("hourglass", spec.hourglass);
-  reader.read("law", spec.law, {{"neo-hookean", FemLaw::neo_hookean}, {"linear", FemLaw::linear}});
+  reader.read("law", spec.law,
+              {{"neo-hookean", fem::Law::neo_hookean}, {"linear", fem::Law::linear}});
   spec.law_loc = reader.value_loc("law").value_or(SourceLoc{});
   reader.read("hexa", spec.hexa,
-              {{"mean-dilatation", FemHexa::mean_dilatation},
-               {"incompatible-modes", FemHexa::incompatible_modes}});
+              {{"mean-dilatation", fem::HexaElement::mean_dilatation},
+               {"incompatible-modes", fem::HexaElement::incompatible_modes}});
   spec.hexa_loc = reader.value_loc("hexa").value_or(SourceLoc{});
   reader.read("density", spec.density);
   reader.read("mass", spec.mass);

@@ -1,5 +1,5 @@
 // Every member of an aggregate, in declaration order, without a hand-kept list: what a run
-// changes (State) is saved, restored and compared as a whole, so a member added later cannot
+// changes (Data) is saved, restored and compared as a whole, so a member added later cannot
 // be missed by the checkpoint. The member count comes from aggregate initialisation and the
 // members from a structured binding; names come from a FieldNames specialisation whose length
 // a static_assert ties to that count.

@@ -7,12 +7,9 @@
 #include <limits>
 #include <stdexcept>
 
-#include "constraints/constraints.hpp"
-#include "constraints/coupled_volume.hpp"
-#include "constraints/doubled.hpp"
-#include "forces/explicit_fem.hpp"
-#include "forces/shape_memory.hpp"
-#include "solver/rigid.hpp"
+#include "model/explicit_fem_cells.hpp"
+#include "model/finalize.hpp"
+#include "model/shape_memory_rest.hpp"
 
 namespace phymul {
 namespace {
@@ -54,19 +51,56 @@ void mark_coupled_volumes(Model& model) {
       if (seen[size_t(i)]) model.coupled_volumes = true;
       seen[size_t(i)] = 1;
     }
-  // The joint projection's scratch; every surface's kept velocity-projection gradient.
-  for (const VolumeConstraint& c : model.volumes) {
-    const size_t size = model.coupled_volumes ? c.nodes.size() : 0;
-    c.coupled_direction.assign(size, Vec3::Zero());
-    c.coupled_gradient.assign(c.nodes.size(), Vec3::Zero());
-    c.coupled_at.assign(c.nodes.size(), Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
-  }
-  model.coupled_factor.assign(
-      model.coupled_volumes ? size_t(kMaxJointVolumes * kMaxJointVolumes) : 0, 0.0);
-  model.coupled_factor_valid = false;
-  model.coupled_scatter.assign(
-      model.coupled_volumes ? coupled_scatter_size(model.rest_position.size()) : 0, 0.0);
   index_shared_volume_nodes(model);
+}
+
+// The node's inertia and the inverse mass of its free axes (held axes stay held).
+void give_inertia(Model& model, int i, double inertia) {
+  model.inertia[size_t(i)] = inertia;
+  for (int a = 0; a < 3; ++a)
+    if (model.inverse_mass[i][a] != 0.0) model.inverse_mass[i][a] = 1.0 / inertia;
+}
+
+// Static equilibrium does not depend on the masses; the time to reach it by pseudo-dynamics
+// does. Lumped masses make corner and edge nodes 8 and 4 times lighter than interior ones
+// while their stiffness is about the same: they alone set the stable step. Masses
+// proportional to each node's stiffness row give every node the largest frequency, so the
+// step stays and the slow modes speed up (Underwood's dynamic relaxation).
+void scale_masses_for_relaxation(Model& model) {
+  const std::vector<double> row = stiffness_row_sums(model);
+  double omega2 = 0.0;
+  for (int i = 0; i < model.node_count(); ++i) omega2 = std::max(omega2, row[i] / model.inertia[i]);
+  if (omega2 == 0.0) return;
+  for (int i = 0; i < model.node_count(); ++i) {
+    // No stiffness, or nothing free to move (held, rigid): keeps its mass.
+    if (row[i] == 0.0 || model.inverse_mass[i] == Vec3::Zero()) continue;
+    give_inertia(model, i, row[i] / omega2);
+  }
+}
+
+// Explicit FEM's mass scaling: the few light nodes that alone set the stable step (the
+// corners of a mapped grid, 8 times lighter than interior nodes) get the inertia that lifts
+// their Gershgorin limit to `target` (s). Equilibria do not change; the dynamics of those
+// nodes are slowed (added_inertia says by how much mass).
+void scale_masses_to(Model& model, double target) {
+  const std::vector<double> row = stiffness_row_sums(model);
+  for (int i = 0; i < model.node_count(); ++i) {
+    const double needed = row[i] * target * target / 4.0;  // 2 / sqrt(row / m) = target
+    if (needed > model.inertia[size_t(i)]) give_inertia(model, i, needed);
+  }
+}
+
+double bounding_diagonal(const std::vector<Vec3>& p) {
+  if (p.empty()) return 1.0;
+  const auto [lo, hi] = bounding_box(p);
+  return std::max((hi - lo).norm(), 1e-12);
+}
+
+double mean_edge(const std::vector<Triangle>& faces, const std::vector<Vec3>& x) {
+  double sum = 0.0;
+  for (const Triangle& t : faces)
+    sum += (x[t[1]] - x[t[0]]).norm() + (x[t[2]] - x[t[1]]).norm() + (x[t[0]] - x[t[2]]).norm();
+  return faces.empty() ? 0.0 : sum / (3.0 * double(faces.size()));
 }
 
 // Nodes, masses, cells, boundary and node sets of a component's mesh, appended to the model.
@@ -247,29 +281,34 @@ void finalize(Model& model) {
   finalize_doubled(model);
   mark_coupled_volumes(model);
   for (VolumeConstraint& c : model.volumes) index_volume_faces(c);
+  // Penetrations deeper than half a mean rest edge are not looked for: a step moves a node by
+  // far less than that in any stable run.
+  for (ContactPair& pair : model.contact_pairs)
+    pair.margin = 0.5 * std::max(mean_edge(pair.faces[0], model.rest_position),
+                                 mean_edge(pair.faces[1], model.rest_position));
+  // The inertia the steps use: gravity keeps the true masses.
+  const SimulationSpec& s = model.settings;
+  model.inertia = model.mass;
+  if (s.mode == SolveMode::static_equilibrium && s.relaxation_mass_scaling)
+    scale_masses_for_relaxation(model);
+  if (s.mode == SolveMode::dynamic && s.mass_scaling_dt) scale_masses_to(model, *s.mass_scaling_dt);
+  model.finalized_mode = s.mode;
+  model.finalized_relaxation_mass_scaling = s.relaxation_mass_scaling;
+  model.finalized_mass_scaling_dt = s.mass_scaling_dt;
+  model.runaway_edge = runaway_edges(model);
+  model.shortest_runaway_edge =
+      model.runaway_edge.empty()
+          ? std::numeric_limits<double>::infinity()
+          : *std::min_element(model.runaway_edge.begin(), model.runaway_edge.end());
+  model.size_scale = bounding_diagonal(model.rest_position);
 }
 
-State make_state(const Model& model) {
-  State s;
-  s.x = model.rest_position;
-  s.v.assign(model.rest_position.size(), Vec3::Zero());
-  s.f.assign(model.rest_position.size(), Vec3::Zero());
-  size_t memory_nodes = 0;
-  for (const ShapeMemory& m : model.shape_memory) memory_nodes += m.nodes.size();
-  s.rotation.assign(memory_nodes, Eigen::Quaterniond::Identity());
-  init_rigid_states(model, s);
-  s.contact_force.assign(model.obstacles.size(), Vec3::Zero());
-  s.pair_contact_force.assign(model.contact_pairs.size(), Vec3::Zero());
-  if (!model.obstacles.empty()) s.obstacle_touching.assign(model.rest_position.size(), -1);
-  s.pair_contacts.reserve(pair_contact_capacity(model));
-  return s;
-}
-
-size_t pair_contact_capacity(const Model& model) {
-  size_t nodes = 0;
-  for (const ContactPair& pair : model.contact_pairs)
-    nodes += pair.nodes[0].size() + pair.nodes[1].size();
-  return nodes * size_t(kPairContactSweeps);
+bool finalized(const Model& model) {
+  const SimulationSpec& s = model.settings;
+  return model.inverse_mass.size() == model.rest_position.size() &&
+         model.inertia.size() == model.rest_position.size() && model.finalized_mode == s.mode &&
+         model.finalized_relaxation_mass_scaling == s.relaxation_mass_scaling &&
+         model.finalized_mass_scaling_dt == s.mass_scaling_dt;
 }
 
 }  // namespace phymul

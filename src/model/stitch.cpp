@@ -7,8 +7,8 @@
 #include <numeric>
 #include <stdexcept>
 
-#include "forces/explicit_fem.hpp"
-#include "forces/shape_memory.hpp"
+#include "model/explicit_fem_cells.hpp"
+#include "model/shape_memory_rest.hpp"
 #include "phymul/model.hpp"
 
 namespace phymul {

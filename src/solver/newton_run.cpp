@@ -64,7 +64,7 @@ void refuse_all(const std::vector<Spec>& specs, const char* what, const std::str
 void check_newton_scene(const Scene& scene, std::vector<Diagnostic>& problems) {
   const bool newton = uses_newton(scene.simulation);
   for (const ObjectSpec& o : scene.objects)
-    if (!newton && o.material.model == ElasticModel::fem && o.material.law == FemLaw::linear)
+    if (!newton && o.material.model == ElasticModel::fem && o.material.law == fem::Law::linear)
       problems.push_back(
           {o.material.law_loc.line > 0 ? o.material.law_loc : o.material.loc,
            fmt::format("object '{}': 'law: linear' needs the implicit solver (simulation: "
@@ -73,7 +73,7 @@ void check_newton_scene(const Scene& scene, std::vector<Diagnostic>& problems) {
                        o.name)});
   for (const ObjectSpec& o : scene.objects)
     if (!newton && o.material.model == ElasticModel::fem &&
-        o.material.hexa == FemHexa::incompatible_modes)
+        o.material.hexa == fem::HexaElement::incompatible_modes)
       problems.push_back(
           {o.material.hexa_loc.line > 0 ? o.material.hexa_loc : o.material.loc,
            fmt::format("object '{}': 'hexa: incompatible-modes' needs the implicit solver "
@@ -89,26 +89,12 @@ void check_newton_scene(const Scene& scene, std::vector<Diagnostic>& problems) {
   refuse_all(scene.doubled, "doubled nodes", at, problems);
 }
 
-namespace {
-
-fem::Material material_of(const Scene& scene, const std::string& component) {
-  for (const ObjectSpec& o : scene.objects)
-    if (o.name == component)
-      return {o.material.law == FemLaw::linear ? fem::Law::linear : fem::Law::neo_hookean,
-              o.material.young, o.material.poisson,
-              o.material.hexa == FemHexa::incompatible_modes ? fem::HexaElement::incompatible_modes
-                                                             : fem::HexaElement::mean_dilatation};
-  throw std::logic_error(fmt::format("newton_problem: no object named '{}'", component));
-}
-
-}  // namespace
-
-fem::Problem newton_problem(const Scene& scene, const Model& model) {
+fem::Problem newton_problem(const Model& model) {
   fem::Problem p;
   p.mesh.points = model.rest_position;
   for (const ExplicitFem& e : model.explicit_fem) {
     const int material = int(p.materials.size());
-    p.materials.push_back(material_of(scene, e.component));
+    p.materials.push_back(e.material);
     const int n = e.nodes_per_cell;
     for (size_t k = 0; k < e.volume.size(); ++k) {
       Cell cell;
@@ -118,7 +104,7 @@ fem::Problem newton_problem(const Scene& scene, const Model& model) {
       p.cell_material.push_back(material);
     }
   }
-  const double end = scene.simulation.duration;
+  const double end = model.settings.duration;
   // A component prescribed twice takes the last value, as the relaxation's projection does.
   std::map<int, double> prescribed;
   for (const PrescribedDisplacement& d : model.prescribed) {
@@ -135,19 +121,19 @@ fem::Problem newton_problem(const Scene& scene, const Model& model) {
   }
   for (int i = 0; i < model.node_count(); ++i)
     p.nodal_force[size_t(i)] += model.mass[size_t(i)] * model.gravity;
-  p.load_steps = scene.simulation.load_steps;
-  p.force_tolerance = scene.simulation.tolerance;
+  p.load_steps = model.settings.load_steps;
+  p.force_tolerance = model.settings.tolerance;
   return p;
 }
 
 namespace {
 
 // The equilibrium of a load step into the simulator's state, which the writers read: the
-// force on a node is minus the reaction (State::f holds every force on it, the supports'
+// force on a node is minus the reaction (Data::f holds every force on it, the supports'
 // excepted, so support_reactions() = -f on the held axes).
 void set_state(Simulator& sim, const std::vector<Vec3>& u, const std::vector<Vec3>& reaction,
                double time) {
-  State& s = sim.state();
+  Data& s = sim.data();
   const Model& m = sim.model();
   for (int i = 0; i < m.node_count(); ++i) {
     s.x[size_t(i)] = m.rest_position[size_t(i)] + u[size_t(i)];
@@ -201,7 +187,7 @@ RunReport run_newton(const Scene& scene, const RunOptions& options) {
   const std::optional<Checkpoint> from = checkpoint_to_resume(scene, options, scene_hash);
   Simulator sim(compile_scene(scene));
   const Model& model = sim.model();
-  fem::Problem problem = newton_problem(scene, model);
+  fem::Problem problem = newton_problem(model);
   if (from) {
     check_checkpoint_model(*from, model, scene, options);
     check_solve_state(from->newton, model, scene, options);

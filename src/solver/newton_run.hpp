@@ -17,12 +17,12 @@ namespace phymul {
 // diagnostic each, at the offending field, saying what is allowed.
 void check_newton_scene(const Scene& scene, std::vector<Diagnostic>& problems);
 
-// The compiled model as one reference-FEM problem at the scene's end time: its fem cells
+// The compiled model as one reference-FEM problem at its settings' end time: its fem cells
 // (hexahedra, tetrahedra; wedges already cut) with each object's law, E and nu; the fixed
 // and prescribed components at duration (scaled by fem's load steps); dead nodal loads: the
 // `force` loads at duration plus gravity on the lumped node masses (what the relaxation
 // applies). Stitched objects share their merged nodes.
-fem::Problem newton_problem(const Scene& scene, const Model& model);
+fem::Problem newton_problem(const Model& model);
 
 // run_scene for `solver: newton`: a frame and a monitors row at rest and after each
 // converged load step; report.json with the Newton iterations, the support reactions and

@@ -5,8 +5,8 @@
 #include <cstdint>
 #include <limits>
 
-#include "forces/forces.hpp"
-#include "phymul/simulator.hpp"
+#include "phymul/forces.hpp"
+#include "phymul/simulation.hpp"
 
 namespace phymul {
 namespace {
@@ -23,7 +23,7 @@ double start_component(int node, int axis) {
 
 }  // namespace
 
-FrequencyEstimate highest_frequency(const Model& model, const State& state,
+FrequencyEstimate highest_frequency(const Model& model, const Data& state,
                                     const std::vector<double>& inertia, double load_time,
                                     int max_iterations) {
   // Power iteration on A = M^-1/2 (-df/dx) M^-1/2 over the free axes, A y by central
@@ -42,7 +42,7 @@ FrequencyEstimate highest_frequency(const Model& model, const State& state,
     for (int a = 0; a < 3; ++a)
       if (model.inverse_mass[size_t(i)][a] != 0.0) y[size_t(i)][a] = start_component(i, a);
   }
-  State plus = state, minus = state;
+  Data plus = state, minus = state;
   FrequencyEstimate e;
   for (e.iterations = 0; e.iterations < max_iterations;) {
     double norm = 0.0, largest_move = 0.0;

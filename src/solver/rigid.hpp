@@ -5,39 +5,31 @@
 // drift, so an asymmetric body tumbles about its principal axes as it should.
 #pragma once
 
-#include "phymul/model.hpp"
+#include "phymul/data.hpp"
 
 namespace phymul {
 
-// Fills Model::rigid_bodies (nodes, mass, principal inertia, offsets) and
-// Model::rigid_body_of from the node masses; the doubled partners of rigid nodes join the
-// body. Called by finalize; throws std::invalid_argument on a degenerate body.
-void finalize_rigid_bodies(Model& model);
-
-// State::bodies at rest.
-void init_rigid_states(const Model& model, State& state);
-
-// Net force (N) and torque about the centre (N m) of the forces State::f on the body's
+// Net force (N) and torque about the centre (N m) of the forces Data::f on the body's
 // nodes, less (when damped) the mass-proportional damping of their velocities.
-void rigid_load(const Model& model, const State& state, int body, Vec3& force, Vec3& torque,
+void rigid_load(const Model& model, const Data& state, int body, Vec3& force, Vec3& torque,
                 bool damped);
 
 // Half kick: momenta += h/2 (force, torque) for every free body, then the node velocities
 // from the body velocities.
-void kick_rigid_bodies(const Model& model, State& state, double h);
+void kick_rigid_bodies(const Model& model, Data& state, double h);
 
 // Drift: free bodies move by h with their momenta (free rotation by the splitting); driven
 // ones take their pose at load_time. Node positions are set from the poses.
-void drift_rigid_bodies(const Model& model, State& state, double h, double load_time);
+void drift_rigid_bodies(const Model& model, Data& state, double h, double load_time);
 
 // Node positions (and velocities) from the bodies' poses and momenta.
-void place_rigid_nodes(const Model& model, State& state);
+void place_rigid_nodes(const Model& model, Data& state);
 
 // Zero momenta (static relaxation restarts from rest).
-void stop_rigid_bodies(State& state);
+void stop_rigid_bodies(Data& state);
 
 // Largest out-of-balance of the free bodies: |force| and |torque| / size (N).
-double rigid_residual(const Model& model, const State& state);
+double rigid_residual(const Model& model, const Data& state);
 
 // Free rotation of a body with principal moments `inertia` and world angular momentum L for
 // a time h: the symmetric splitting over the three principal axes.

@@ -76,12 +76,12 @@ void run_static(Run& run, const Checkpoint* from) {
   RunReport& report = run.report;
   report.mode = "static";
   StaticResult r;
-  CheckpointClock clock(run.options.checkpoint_every, sim.state().step, 0.0);
+  CheckpointClock clock(run.options.checkpoint_every, sim.data().step, 0.0);
   bool interrupted = !from && interrupt_requested();
   if (interrupted) run.save_checkpoint(0, 0.0);
   if (!interrupted) {
     const auto check = [&](long, double residual) {
-      const StaticProgress& p = sim.static_progress();
+      const StaticProgress& p = sim.data().static_progress;
       const long total = p.iterations + p.step_iterations;
       const bool stop = run.stop_requested(total);
       if (stop || clock.due(total, 0.0, 0.0)) run.save_checkpoint(0, 0.0);
@@ -95,7 +95,7 @@ void run_static(Run& run, const Checkpoint* from) {
       interrupted = true;
     }
   }
-  report.steps = interrupted ? sim.state().step : r.iterations;
+  report.steps = interrupted ? sim.data().step : r.iterations;
   report.converged = interrupted ? false : r.converged;
   report.residual = interrupted ? sim.max_residual_force() : r.residual;
   if (interrupted) {
@@ -112,33 +112,34 @@ void run_static(Run& run, const Checkpoint* from) {
   run.out.frame(sim);
 }
 
-void run_dynamic(Run& run, const Checkpoint* from) {
+// Whole steps that land exactly on the duration, none larger than the chosen dt: sets that
+// dt and returns their number.
+long set_whole_steps(Simulator& sim) {
+  const double duration = sim.model().settings.duration;
+  const long steps = std::max(1L, long(std::ceil(duration / sim.dt() - 1e-9)));
+  sim.set_dt(duration / double(steps));
+  return steps;
+}
+
+void run_dynamic(Run& run, const Checkpoint* from, long steps) {
   Simulator& sim = run.sim;
   const SimulationSpec& settings = sim.model().settings;
   RunReport& report = run.report;
   ResultWriter& out = run.out;
-  // Whole steps that land exactly on the duration, none larger than the chosen dt.
-  const long steps = std::max(1L, long(std::ceil(settings.duration / sim.dt() - 1e-9)));
-  sim.set_dt(settings.duration / double(steps));
-  report.dt = sim.dt();
-  if (from && (from->dt != sim.dt() || from->steps_done >= steps))
-    throw CheckpointError(fmt::format(
-        "the checkpoint (step {}, dt {} s) does not belong to this run ({} steps of {} s)",
-        from->steps_done, from->dt, steps, sim.dt()));
   const double interval = run.scene.output.interval;
   double next_frame = from ? from->next_frame : interval > 0 ? interval : settings.duration;
   // A monitor row computes the residual force (about 15 % of a step on the prostate study):
   // 500 rows draw any run's history, where a row every other step cost real time.
   const long monitor_every = std::max(1L, steps / 500);
   long done = from ? from->steps_done : 0;
-  CheckpointClock clock(run.options.checkpoint_every, done, sim.state().time);
+  CheckpointClock clock(run.options.checkpoint_every, done, sim.data().time);
   double stepping = 0.0;  // s of wall-clock time inside sim.step()
   for (long k = done + 1; k <= steps; ++k) {
     const auto before = std::chrono::steady_clock::now();
     sim.step();
     stepping += std::chrono::duration<double>(std::chrono::steady_clock::now() - before).count();
     done = k;
-    const double t = sim.state().time;
+    const double t = sim.data().time;
     const bool monitored = k % monitor_every == 0 || k == steps;
     const bool framed = k == steps || t >= next_frame - 0.5 * sim.dt();
     if (monitored) out.monitor(sim);
@@ -160,7 +161,7 @@ void run_dynamic(Run& run, const Checkpoint* from) {
       run.progress.show(double(k) / double(steps), fmt::format("t = {:.4g} s  step {}", t, k));
   }
   run.progress.show(double(done) / double(steps),
-                    fmt::format("t = {:.4g} s  step {}", sim.state().time, done), true);
+                    fmt::format("t = {:.4g} s  step {}", sim.data().time, done), true);
   report.steps = done;
   report.step_wall_time = stepping;
   report.residual = sim.max_residual_force();
@@ -229,13 +230,15 @@ RunReport run_scene(const Scene& scene, const RunOptions& options) {
     throw std::invalid_argument(
         "--checkpoint-every: a static run counts relaxation iterations, not simulated time; "
         "give a number of steps, e.g. '--checkpoint-every 5000 steps'");
+  const long steps = static_mode ? 0 : set_whole_steps(sim);
   if (from) check_checkpoint_model(*from, model, scene, options);
-  if (from && (from->static_mode != static_mode || (static_mode && from->dt != sim.dt())))
+  if (from && (from->static_mode != static_mode || from->data.dt != sim.dt() ||
+               (!static_mode && from->steps_done >= steps)))
     throw CheckpointError(fmt::format(
-        "cannot resume in {}: the checkpoint is of a {} run with dt {} s, this one {} with dt {} "
-        "s; start a new run",
-        options.output_dir.string(), from->static_mode ? "static" : "dynamic", from->dt,
-        static_mode ? "static" : "dynamic", sim.dt()));
+        "cannot resume in {}: the checkpoint is of a {} run of dt {} s at step {}, this one {} "
+        "with dt {} s ({} steps); start a new run",
+        options.output_dir.string(), from->static_mode ? "static" : "dynamic", from->data.dt,
+        from->steps_done, static_mode ? "static" : "dynamic", sim.dt(), steps));
   std::filesystem::create_directories(options.output_dir);
   ResultWriter out(options.output_dir, scene.file.stem().string(), model, scene.output.vtk,
                    scene.output.format);
@@ -261,26 +264,26 @@ RunReport run_scene(const Scene& scene, const RunOptions& options) {
     if (static_mode)
       run_static(run, from ? &*from : nullptr);
     else
-      run_dynamic(run, from ? &*from : nullptr);
+      run_dynamic(run, from ? &*from : nullptr, steps);
   } catch (const InstabilityError& e) {
     report.status = "unstable";
     report.message = e.what();
-    report.steps = sim.state().step;
+    report.steps = sim.data().step;
     report.residual = sim.max_residual_force();
     // The step that failed was undone: write the last good state, unless it is written.
-    const double t = sim.state().time;
+    const double t = sim.data().time;
     if (out.monitored_time() != t) out.monitor(sim);
     if (out.frame_list().empty() || out.frame_list().back().time != t) out.frame(sim);
   }
   report.wall_time =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  report.simulated_time = sim.state().time;
+  report.simulated_time = sim.data().time;
   report.frames = out.frames();
-  const long steps_here = sim.state().step - (from ? from->state.step : 0);
+  const long steps_here = sim.data().step - (from ? from->data.step : 0);
   if (steps_here > 0)
     report.ns_per_node_per_step =
         report.wall_time * 1e9 / (double(steps_here) * double(report.nodes));
-  const double simulated_here = sim.state().time - (from ? from->state.time : 0.0);
+  const double simulated_here = sim.data().time - (from ? from->data.time : 0.0);
   if (!static_mode && report.wall_time > 0.0)
     report.real_time_factor = simulated_here / report.wall_time;
   if (!static_mode && report.step_wall_time > 0.0)

@@ -5,7 +5,7 @@
 #include <csignal>
 #include <cstdio>
 
-#include "model/state_fields.hpp"
+#include "model/data_fields.hpp"
 
 namespace phymul {
 
@@ -45,17 +45,17 @@ void check_checkpoint_model(const Checkpoint& c, const Model& model, const Scene
         "cannot resume in {}: the model compiled from {} differs from the checkpoint's (a mesh "
         "or data file it reads changed?); start a new run",
         options.output_dir.string(), scene.file.string()));
-  const std::string mismatch = state_shape_mismatch(model, c.state);
+  const std::string mismatch = data_shape_mismatch(model, c.data);
   if (!mismatch.empty())
     throw CheckpointError(fmt::format(
-        "cannot resume in {}: the checkpoint's state does not fit the model compiled from {} "
+        "cannot resume in {}: the checkpoint's data does not fit the model compiled from {} "
         "({}); it was written by another phymul or is damaged: start a new run",
         options.output_dir.string(), scene.file.string(), mismatch));
 }
 
 void start_or_restore(const Checkpoint* from, Simulator& sim, ResultWriter& out) {
   if (from) {
-    sim.restore(from->state, from->load_time, from->static_progress);
+    sim.restore(from->data);
     out.restore(from->frames, from->monitors);
   } else {
     out.frame(sim);
@@ -68,10 +68,7 @@ void CheckpointWriter::save(Checkpoint c, const Simulator& sim, const ResultWrit
   c.scene_hash = scene_hash;
   c.model_hash = model_hash;
   c.static_mode = sim.model().settings.mode == SolveMode::static_equilibrium;
-  c.dt = sim.dt();
-  c.state = sim.state();
-  c.load_time = sim.load_time();
-  c.static_progress = sim.static_progress();
+  c.data = sim.data();
   c.frames = out.frame_list();
   c.monitors = out.monitors_text();
   // A checkpoint that cannot be written (disk full) must not cost the run its results.

@@ -10,7 +10,7 @@
 #include "io/checkpoint.hpp"
 #include "io/results.hpp"
 #include "phymul/run.hpp"
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 
 namespace phymul {
 

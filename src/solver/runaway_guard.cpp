@@ -4,23 +4,9 @@
 #include <cmath>
 #include <limits>
 
-#include "phymul/thread_team.hpp"
+#include "model/thread_team.hpp"
 
 namespace phymul {
-
-std::vector<double> runaway_edges(const Model& model) {
-  const std::vector<Vec3>& rest = model.rest_position;
-  constexpr double kNone = std::numeric_limits<double>::infinity();
-  std::vector<double> edge(rest.size(), kNone);
-  for (const ShapeMemory& m : model.shape_memory)
-    for (int k = 0; k < int(m.nodes.size()); ++k) {
-      const int i = m.nodes[k];
-      for (int j : m.neighbours.row(k)) edge[i] = std::min(edge[i], (rest[j] - rest[i]).norm());
-    }
-  for (size_t i = 0; i < rest.size(); ++i)
-    if (!(edge[i] > 0.0) || !(model.inverse_mass[i].array() > 0.0).all()) edge[i] = kNone;
-  return edge;
-}
 
 namespace {
 

@@ -18,9 +18,7 @@ namespace phymul {
 // uniform inflation move a node with its neighbours and count for nothing.
 constexpr double kRunawayFraction = 2.0;
 
-// Per node: its shortest rest edge (m) where the guard watches it (a node with a shape
-// memory, free on every axis), infinity elsewhere.
-std::vector<double> runaway_edges(const Model& model);
+// (Each node's shortest rest edge, which the guard measures by, is Model::runaway_edge.)
 
 struct Runaway {
   int node;

@@ -15,7 +15,7 @@
 
 #include "phymul/fem.hpp"
 #include "phymul/model.hpp"
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 
 namespace phymul::calibration {
 namespace {
@@ -115,7 +115,7 @@ struct Pushed {
   double fem_force = 0.0;        // N, |axis reaction| on the pushed nodes
   double lsm_force_per_k = 0.0;  // N per N/m
   Model lsm;                     // at K = E h
-  State lsm_state;               // its equilibrium
+  Data lsm_state;                // its equilibrium
   long lsm_iterations = 0;
 };
 
@@ -152,7 +152,7 @@ Pushed push_both(const Push& p, const std::string& what) {
   r.lsm_iterations = relax_or_throw(sim, 1.0, p.max_iterations, what).iterations;
   r.lsm_force_per_k =
       axis_force(sim.support_reactions(), p.pushed, p.axis) / p.lsm_material.stiffness;
-  r.lsm_state = sim.state();
+  r.lsm_state = sim.data();
   return r;
 }
 
@@ -197,7 +197,7 @@ Compression calibrate_compression(CellType type, int cells, const Options& o) {
   for (ShapeMemory& s : calibrated.shape_memory) s.stiffness = k;
   calibrated.settings.tolerance = o.tolerance * k * o.strain * c.h;
   Simulator check(calibrated);
-  check.state() = r.lsm_state;
+  check.data() = r.lsm_state;
   c.lsm_iterations += relax_or_throw(check, 1.0, o.max_iterations, "compression").iterations;
   c.lsm_force = axis_force(check.support_reactions(), p.pushed, 2);
   c.force_rel_diff = (c.lsm_force - c.fem_force) / c.fem_force;
@@ -345,9 +345,9 @@ Cantilever check_cantilever(CellType type, int cells, double alpha, const Option
   Simulator sim(model);
   c.lsm_iterations = relax_or_throw(sim, 1.0, o.max_iterations, "cantilever").iterations;
   for (int node : tip)
-    c.lsm_tip -= (sim.state().x[node] - mesh.points[node]).z() / double(tip.size());
+    c.lsm_tip -= (sim.data().x[node] - mesh.points[node]).z() / double(tip.size());
   std::tie(c.displacement_rms, c.displacement_max) =
-      displacement_difference(mesh.points, sim.state().x, solved.displacement, c.fem_tip);
+      displacement_difference(mesh.points, sim.data().x, solved.displacement, c.fem_tip);
 
   const double L = o.beam.x(), b = o.beam.y(), t = o.beam.z();
   const double q = o.density * o.gravity * b * t;  // N/m

@@ -9,7 +9,7 @@
 
 #include "io/obstacle_surface.hpp"
 #include "phymul/prostate.hpp"
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 #include "phymul/vtk.hpp"
 
 namespace phymul::prostate {
@@ -44,7 +44,7 @@ double pressed_area(const Model& model) {
 }
 
 // Force (N) of a pressure on its faces at the current positions.
-Vec3 pressure_resultant(const Model& model, const State& state, double load_time) {
+Vec3 pressure_resultant(const Model& model, const Data& state, double load_time) {
   const PressureLoad& p = model.pressures.at(0);
   Vec3 f = Vec3::Zero();
   for (const Triangle& t : p.faces) {
@@ -82,7 +82,7 @@ double probe_force_from_balance(const Simulator& sim) {
 
 // The rigid probe's axis height at which it just touches the prostate: every prostate node
 // above its surface, one on it.
-double touching_axis_height(const Model& model, const State& state, double radius) {
+double touching_axis_height(const Model& model, const Data& state, double radius) {
   const Component& p = model.components[size_t(component_index(model, "prostate"))];
   double z = std::numeric_limits<double>::infinity();
   for (int i : p.nodes) {
@@ -159,7 +159,7 @@ SceneSettings dynamic_scene(const Options& o, double filling, Probe probe) {
     relax_to(sim, s.duration * s.settle_fraction);
     // Whole micrometres below touching: the scene file reads back the same number on any
     // build, and the probe starts just clear of the prostate.
-    const double z = touching_axis_height(sim.model(), sim.state(), o.probe_radius);
+    const double z = touching_axis_height(sim.model(), sim.data(), o.probe_radius);
     s.probe_axis_point.z() = std::floor(z * 1e6) * 1e-6;
   }
   s.dynamic = true;
@@ -175,27 +175,33 @@ FillingResult run_filling(const Options& o, double filling, Probe probe,
   FillingResult r;
   r.filling = filling;
   r.probe = probe;
-  State gravity_equilibrium;
+  Data gravity_equilibrium;
   if (probe == Probe::rigid) {  // place the probe against the prostate's equilibrium
     Simulator sim(compile(o, s));
     r.iterations += relax_to(sim, settle).iterations;
-    s.probe_axis_point.z() = touching_axis_height(sim.model(), sim.state(), o.probe_radius);
-    gravity_equilibrium = sim.state();
+    s.probe_axis_point.z() = touching_axis_height(sim.model(), sim.data(), o.probe_radius);
+    gravity_equilibrium = sim.data();
   }
   Simulator sim(compile(o, s));
   const Model& model = sim.model();
   // The probe only touches that equilibrium: the run starts from it instead of relaxing
   // gravity again.
-  if (probe == Probe::rigid) sim.restore(std::move(gravity_equilibrium), settle, {});
+  if (probe == Probe::rigid) {
+    gravity_equilibrium.dt = sim.dt();  // this model's step, a static solve from the start
+    gravity_equilibrium.stable_dt = sim.stable_dt();
+    gravity_equilibrium.load_time = settle;
+    gravity_equilibrium.static_progress = {};
+    sim.restore(gravity_equilibrium);
+  }
   r.iterations += relax_to(sim, settle).iterations;
-  r.before = sim.state().x;
-  if (frames) frames->push_back({settle, sim.state().x});
+  r.before = sim.data().x;
+  if (frames) frames->push_back({settle, sim.data().x});
   for (int k = 2; k <= s.load_steps; ++k) {
     const double t = s.duration * k / s.load_steps;
     r.iterations += relax_to(sim, t).iterations;
-    if (frames) frames->push_back({t, sim.state().x});
+    if (frames) frames->push_back({t, sim.data().x});
   }
-  r.after = sim.state().x;
+  r.after = sim.data().x;
   const Measures before = measure(model, r.before), after = measure(model, r.after);
   r.prostate_height = before.height;
   r.prostate_deformation_pct = 100.0 * (before.height - after.height) / before.height;
@@ -204,7 +210,7 @@ FillingResult run_filling(const Options& o, double filling, Probe probe,
   r.bladder_volume = sim.component_volumes()[size_t(component_index(model, "bladder"))];
   r.probe_force = probe_force_from_balance(sim);
   if (probe == Probe::pressure)
-    r.pressure_resultant = pressure_resultant(model, sim.state(), s.duration).z();
+    r.pressure_resultant = pressure_resultant(model, sim.data(), s.duration).z();
   const Component& p = model.components[size_t(component_index(model, "prostate"))];
   const Component& b = model.components[size_t(component_index(model, "bladder"))];
   for (int i : p.nodes)

@@ -4,7 +4,7 @@
 #include <stdexcept>
 
 #include "phymul/calibration.hpp"
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 #include "phymul/truthcube.hpp"
 #include "validation/truthcube_models.hpp"
 
@@ -75,7 +75,7 @@ void run_shape_memory(const Study& study, const std::vector<Bead>& beads,
     const std::vector<Vec3> reaction = sim.support_reactions();
     for (int n : plates.plate) r.plate_force += reaction[size_t(n)].z();
     r.plate_force = std::abs(r.plate_force) * force_scale;
-    r.positions = sim.state().x;
+    r.positions = sim.data().x;
     r.beads = embedding.apply(r.positions);
     r.metrics = compare(beads, l, r.beads);
     out.push_back(std::move(r));

@@ -129,8 +129,8 @@ TEST(Checkpoint, StaticRunStoppedInALoadStepAndResumedMatchesByteForByte) {
   const Checkpoint c = read_checkpoint(part / "checkpoint.bin");
   ASSERT_TRUE(c.static_mode);
   // Stopped inside a load step, with kinetic damping under way: the hard case.
-  EXPECT_GE(c.static_progress.load_step, 1);
-  EXPECT_GT(c.static_progress.step_iterations, 0);
+  EXPECT_GE(c.data.static_progress.load_step, 1);
+  EXPECT_GT(c.data.static_progress.step_iterations, 0);
   const auto r2 = phymul("--resume " + part.string());
   ASSERT_EQ(r2.exit_code, 0) << r2.output;
   expect_same_results(full, part);
@@ -154,10 +154,10 @@ TEST(Checkpoint, StaticRunStoppedBetweenLoadStepsAndResumedMatchesByteForByte) {
                           " --stop-after " + std::to_string(after));
     ASSERT_EQ(r.exit_code, 130) << r.output;
     const Checkpoint c = read_checkpoint(part / "checkpoint.bin");
-    EXPECT_EQ(c.static_progress.load_step, stop + 1);
-    EXPECT_EQ(c.static_progress.step_iterations, 0);
-    EXPECT_GT(c.static_progress.iterations, after - 1);
-    after = c.static_progress.iterations + 1;
+    EXPECT_EQ(c.data.static_progress.load_step, stop + 1);
+    EXPECT_EQ(c.data.static_progress.step_iterations, 0);
+    EXPECT_GT(c.data.static_progress.iterations, after - 1);
+    after = c.data.static_progress.iterations + 1;
   }
   const auto r1 = phymul("--resume " + part.string());
   ASSERT_EQ(r1.exit_code, 0) << r1.output;
@@ -223,9 +223,9 @@ TEST(Checkpoint, PeriodicCheckpointSurvivesSigkill) {
   ASSERT_TRUE(fs::is_regular_file(part / "checkpoint.bin"));
   const Checkpoint c = read_checkpoint(part / "checkpoint.bin");
   // Checkpoints at multiples of 0.01 s of simulated time (to within half a step).
-  const double dt = c.dt;
-  const double phase = std::remainder(c.state.time, 0.01);
-  EXPECT_LT(std::abs(phase), dt) << "checkpoint at t = " << c.state.time;
+  const double dt = c.data.dt;
+  const double phase = std::remainder(c.data.time, 0.01);
+  EXPECT_LT(std::abs(phase), dt) << "checkpoint at t = " << c.data.time;
   // Resumed and the uninterrupted run, both stopped 50 steps further: the same files.
   const std::string stop = " --stop-after " + std::to_string(c.steps_done + 50);
   const auto r0 = phymul(scene.string() + " -o " + reference.string() + stop);
@@ -364,18 +364,18 @@ TEST_F(DamagedCheckpoint, OtherVersion) {
 TEST(CheckpointFormat, EveryPrefixAndForgedFieldIsRefused) {
   Checkpoint c;
   c.scene_file = "/tmp/scene.yaml";
-  c.dt = 1e-3;
-  c.state.x.assign(3, Vec3(1, 2, 3));
-  c.state.v.assign(3, Vec3::Zero());
-  c.state.f.assign(3, Vec3::Zero());
-  c.state.rotation.assign(2, Eigen::Quaterniond::Identity());
+  c.data.dt = 1e-3;
+  c.data.x.assign(3, Vec3(1, 2, 3));
+  c.data.v.assign(3, Vec3::Zero());
+  c.data.f.assign(3, Vec3::Zero());
+  c.data.rotation.assign(2, Eigen::Quaterniond::Identity());
   c.frames = {{0.0, "scene_000000.vtu"}};
   c.monitors = "time_s\n0\n";
   TempDir dir;
   write_checkpoint(dir.path() / "c.bin", c);
   const std::string bytes = read_text(dir.path() / "c.bin");
   const Checkpoint back = parse_checkpoint(bytes, "c.bin");
-  EXPECT_EQ(back.state.x, c.state.x);
+  EXPECT_EQ(back.data.x, c.data.x);
   EXPECT_EQ(back.frames.size(), 1u);
   EXPECT_EQ(back.monitors, c.monitors);
   for (size_t n = 0; n < bytes.size(); ++n)
@@ -383,7 +383,8 @@ TEST(CheckpointFormat, EveryPrefixAndForgedFieldIsRefused) {
   // Forge: a count field far too large, with a valid checksum.
   constexpr size_t kHeader = 32;
   std::string body = bytes.substr(kHeader, bytes.size() - kHeader - 8);
-  const size_t x_count = 8 + c.scene_file.size() + 8 * 3 + 8 + 8 + 8;  // offset of |x|
+  // scene_file (length, bytes), two hashes, static_mode, then data's time and step: |x|.
+  const size_t x_count = 8 + c.scene_file.size() + 8 * 3 + 8 + 8;
   for (uint64_t huge : {uint64_t(1) << 62, uint64_t(4), uint64_t(0)}) {
     std::string forged = body;
     std::memcpy(forged.data() + x_count, &huge, 8);
@@ -420,21 +421,21 @@ TEST(Checkpoint, RigidBodiesAndFibresResumeByteForByte) {
 namespace phymul {
 namespace {
 
-// A checkpoint whose state lacks an array the model needs (as version 1 files lacked the
+// A checkpoint whose data lacks an array the model needs (as version 1 files lacked the
 // obstacles' contact forces, on which a resumed run crashed): exit 1 naming the member, no
 // crash.
-TEST(Checkpoint, AStateThatDoesNotFitTheModelIsRefusedByName) {
+TEST(Checkpoint, DataThatDoesNotFitTheModelIsRefusedByName) {
   TempDir dir;
   const fs::path scene = fs::path(PHYMUL_SOURCE_DIR) / "examples" / "probe.yaml";
   const fs::path part = dir.path() / "part";
   ASSERT_EQ(phymul(scene.string() + " -o " + part.string() + " --stop-after 100").exit_code, 130);
   Checkpoint c = read_checkpoint(part / "checkpoint.bin");
-  ASSERT_FALSE(c.state.contact_force.empty());
-  c.state.contact_force.clear();
+  ASSERT_FALSE(c.data.contact_force.empty());
+  c.data.contact_force.clear();
   write_checkpoint(part / "checkpoint.bin", c);
   const auto r = phymul("--resume " + part.string());
   EXPECT_EQ(r.exit_code, 1) << r.output;
-  EXPECT_NE(r.output.find("'state.contact_force' has 0 entries where the model has 1"),
+  EXPECT_NE(r.output.find("'data.contact_force' has 0 entries where the model has 1"),
             std::string::npos)
       << r.output;
 }

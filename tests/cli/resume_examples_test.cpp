@@ -78,7 +78,8 @@ int run_plain(const std::string& args) {
 // Steps (dynamic), relaxation iterations (static) or Newton iterations the checkpoint is at.
 long progress_of(const Checkpoint& c) {
   if (c.newton.load_steps_done > 0) return c.newton.newton_iterations;
-  if (c.static_mode) return c.static_progress.iterations + c.static_progress.step_iterations;
+  if (c.static_mode)
+    return c.data.static_progress.iterations + c.data.static_progress.step_iterations;
   return c.steps_done;
 }
 
@@ -119,7 +120,7 @@ TEST_P(ResumeExample, InterruptedBySigintAndResumedWritesTheSameFiles) {
       pause = steps_ + 1;  // no more
       continue;
     }
-    stops.insert(c.static_progress.step_iterations > 0 ? "within" : "between");
+    stops.insert(c.data.static_progress.step_iterations > 0 ? "within" : "between");
     pause = progress_of(c) + 1;
   }
   if (static_) {

@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 #include "support/models.hpp"
 
 namespace phymul {
@@ -121,7 +121,7 @@ TEST(ContactProjection, BuilderChecksItsInput) {
 // the equilibrium relax reports.
 double free_residual_off_contact(const Simulator& sim) {
   const Model& m = sim.model();
-  const State& s = sim.state();
+  const Data& s = sim.data();
   double largest = 0.0;
   for (int i = 0; i < m.node_count(); ++i) {
     bool touching = false;
@@ -152,16 +152,16 @@ TEST(Contact, BoxDroppedOnAPlaneNeverCrossesItAndRestsOnIt) {
   double lowest = 1.0;
   for (int k = 0; k < 3000; ++k) {
     sim.step();
-    for (const Vec3& x : sim.state().x) lowest = std::min(lowest, x.z());
+    for (const Vec3& x : sim.data().x) lowest = std::min(lowest, x.z());
   }
   EXPECT_GE(lowest, -1e-15);
   EXPECT_LT(lowest, 1e-12);  // it did land
-  ASSERT_TRUE(sim.relax(sim.state().time, 200000).converged);
-  for (const Vec3& x : sim.state().x) EXPECT_GE(x.z(), -1e-15);
+  ASSERT_TRUE(sim.relax(sim.data().time, 200000).converged);
+  for (const Vec3& x : sim.data().x) EXPECT_GE(x.z(), -1e-15);
   double weight = 0.0;
   for (double mass : model.mass) weight += mass * 9.81;
   const double residual = free_residual_off_contact(sim);
-  const Vec3 contact = obstacle_force(sim.model(), sim.state(), 0);
+  const Vec3 contact = obstacle_force(sim.model(), sim.data(), 0);
   std::printf("plane: steps' lowest z %.3g m, contact %.12g N, weight %.12g N, residual %.3g N\n",
               lowest, contact.z(), weight, residual);
   EXPECT_NEAR(contact.z(), weight, 1e-6 * weight);
@@ -189,14 +189,14 @@ TEST(Contact, MovingSphereNeverHasANodeInside) {
   Simulator sim(model);
   double deepest = 0.0;
   int touching = 0;
-  while (sim.state().time < 0.3) {
+  while (sim.data().time < 0.3) {
     sim.step();
-    for (const Vec3& x : sim.state().x)
-      deepest = std::min(deepest, obstacle_distance(ball, x, sim.state().time).distance);
+    for (const Vec3& x : sim.data().x)
+      deepest = std::min(deepest, obstacle_distance(ball, x, sim.data().time).distance);
   }
-  for (const Vec3& x : sim.state().x)
-    touching += std::abs(obstacle_distance(ball, x, sim.state().time).distance) <= 1e-12;
-  std::printf("sphere: %ld steps, deepest %.3g m, %d nodes touching at the end\n", sim.state().step,
+  for (const Vec3& x : sim.data().x)
+    touching += std::abs(obstacle_distance(ball, x, sim.data().time).distance) <= 1e-12;
+  std::printf("sphere: %ld steps, deepest %.3g m, %d nodes touching at the end\n", sim.data().step,
               deepest, touching);
   EXPECT_GE(deepest, -1e-15);
   EXPECT_GE(touching, 3);  // measured 4
@@ -221,7 +221,7 @@ TEST(Contact, ProbeForceBalancesTheSupportReactions) {
   finalize(model);
   Simulator sim(model);
   ASSERT_TRUE(sim.relax(1.0, 200000).converged);
-  const Vec3 contact = obstacle_force(sim.model(), sim.state(), 0);
+  const Vec3 contact = obstacle_force(sim.model(), sim.data(), 0);
   Vec3 support = Vec3::Zero();
   for (const Vec3& r : sim.support_reactions()) support += r;
   const double residual = free_residual_off_contact(sim);
@@ -230,7 +230,7 @@ TEST(Contact, ProbeForceBalancesTheSupportReactions) {
               residual);
   EXPECT_GT(contact.z(), 0.0);  // the probe pushes the block up
   EXPECT_LT((contact + support).norm(), 1e-6 * contact.norm());
-  for (const Vec3& x : sim.state().x) EXPECT_GE(obstacle_distance(probe, x, 1.0).distance, -1e-15);
+  for (const Vec3& x : sim.data().x) EXPECT_GE(obstacle_distance(probe, x, 1.0).distance, -1e-15);
 }
 
 }  // namespace

@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "constraints/constraints.hpp"
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 #include "support/models.hpp"
 
 namespace phymul {
@@ -31,7 +31,7 @@ Model two_chambers(const Schedule& left_target = {}) {
   return model;
 }
 
-double relative_error(const Model& m, const State& s, int k) {
+double relative_error(const Model& m, const Data& s, int k) {
   const VolumeConstraint& c = m.volumes[size_t(k)];
   const double target = c.target_at(s.time);
   return std::abs(enclosed_volume(s.x, c.triangles) - target) / target;
@@ -46,14 +46,13 @@ TEST(CoupledVolumes, TwoChambersSharingAWallKeepBothVolumesEveryStep) {
     Simulator sim(m);
     double worst = 0.0;
     double wall_moved = 0.0;
-    while (sim.state().time < 0.3) {
+    while (sim.data().time < 0.3) {
       sim.step();
-      worst =
-          std::max({worst, relative_error(m, sim.state(), 0), relative_error(m, sim.state(), 1)});
+      worst = std::max({worst, relative_error(m, sim.data(), 0), relative_error(m, sim.data(), 1)});
     }
     for (int i = 0; i < m.node_count(); ++i)
       if (m.rest_position[i].x() == 0.0)
-        wall_moved = std::max(wall_moved, (sim.state().x[i] - m.rest_position[i]).norm());
+        wall_moved = std::max(wall_moved, (sim.data().x[i] - m.rest_position[i]).norm());
     std::printf("two chambers (%s): worst relative volume error %.3g, wall moved %.3g m\n",
                 scheme == Integrator::verlet ? "verlet" : "newton-cotes", worst, wall_moved);
     EXPECT_LT(worst, 1e-10);
@@ -85,11 +84,11 @@ TEST(CoupledVolumes, VelocitiesAreTangentToBothConstraints) {
   std::vector<Vec3> grad(size_t(m.node_count()));
   for (int k = 0; k < 200; ++k) sim.step();
   for (const VolumeConstraint& c : m.volumes) {
-    volume_gradient(c, sim.state().x, grad);
+    volume_gradient(c, sim.data().x, grad);
     double rate = 0.0, scale = 0.0;
     for (int i : c.nodes) {
-      rate += grad[i].dot(sim.state().v[i]);
-      scale += grad[i].norm() * sim.state().v[i].norm();
+      rate += grad[i].dot(sim.data().v[i]);
+      scale += grad[i].norm() * sim.data().v[i].norm();
     }
     std::printf("%s: dV/dt %.3g m^3/s against a scale of %.3g\n", c.component.c_str(), rate, scale);
     EXPECT_GT(scale, 0.0);
@@ -103,11 +102,11 @@ TEST(CoupledVolumes, ScheduledTargetIsFollowedWhileTheOtherChamberKeepsItsVolume
   const Model m = two_chambers(Schedule{{0.0, 0.2}, {Vec3(v0, 0, 0), Vec3(1.2 * v0, 0, 0)}});
   Simulator sim(m);
   double worst = 0.0;
-  while (sim.state().time < 0.3) {
+  while (sim.data().time < 0.3) {
     sim.step();
-    worst = std::max({worst, relative_error(m, sim.state(), 0), relative_error(m, sim.state(), 1)});
+    worst = std::max({worst, relative_error(m, sim.data(), 0), relative_error(m, sim.data(), 1)});
   }
-  const double left = enclosed_volume(sim.state().x, m.volumes[0].triangles);
+  const double left = enclosed_volume(sim.data().x, m.volumes[0].triangles);
   std::printf("filling: worst relative error %.3g, left chamber %.6g m^3 (target %.6g)\n", worst,
               left, 1.2 * v0);
   EXPECT_LT(worst, 1e-10);
@@ -124,8 +123,8 @@ TEST(CoupledVolumes, StaticRelaxationConvergesWithSharedNodes) {
   std::printf("two chambers static: %s in %ld iterations, residual %.3g N\n",
               r.converged ? "converged" : "NOT converged", r.iterations, r.residual);
   EXPECT_TRUE(r.converged);
-  EXPECT_LT(relative_error(m, sim.state(), 0), 1e-10);
-  EXPECT_LT(relative_error(m, sim.state(), 1), 1e-10);
+  EXPECT_LT(relative_error(m, sim.data(), 0), 1e-10);
+  EXPECT_LT(relative_error(m, sim.data(), 1), 1e-10);
   // The supports carry the weight: the pressures of the two chambers cancel out overall.
   Vec3 support = Vec3::Zero();
   for (const Vec3& f : sim.support_reactions()) support += f;
@@ -150,12 +149,12 @@ TEST(CoupledVolumes, BalloonFollowsAFillingSchedule) {
   EXPECT_FALSE(model.coupled_volumes);
   Simulator sim(model);
   double worst = 0.0;
-  while (sim.state().time < 0.6) {
+  while (sim.data().time < 0.6) {
     sim.step();
-    worst = std::max(worst, relative_error(model, sim.state(), 0));
+    worst = std::max(worst, relative_error(model, sim.data(), 0));
   }
   EXPECT_LT(worst, 1e-10);
-  EXPECT_NEAR(enclosed_volume(sim.state().x, model.volumes[0].triangles), 3 * v0, 1e-10 * v0);
+  EXPECT_NEAR(enclosed_volume(sim.data().x, model.volumes[0].triangles), 3 * v0, 1e-10 * v0);
 }
 
 }  // namespace

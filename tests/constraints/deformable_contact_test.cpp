@@ -6,7 +6,7 @@
 #include <cmath>
 #include <random>
 
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 #include "support/models.hpp"
 
 namespace phymul {
@@ -116,15 +116,15 @@ TEST(DeformableContact, PressedBallsNeverInterpenetrateAndTheContactCarriesTheLo
   double worst = 0.0;
   for (int k = 0; k < 300; ++k) {
     sim.step();
-    worst = std::max(worst, deepest_inside(m, sim.state().x));
+    worst = std::max(worst, deepest_inside(m, sim.data().x));
   }
-  const Vec3 dynamic = sim.state().pair_contact_force[0];
-  ASSERT_TRUE(sim.relax(sim.state().time, 20000).converged);
-  worst = std::max(worst, deepest_inside(m, sim.state().x));
-  const Vec3 contact = sim.state().pair_contact_force[0];
+  const Vec3 dynamic = sim.data().pair_contact_force[0];
+  ASSERT_TRUE(sim.relax(sim.data().time, 20000).converged);
+  worst = std::max(worst, deepest_inside(m, sim.data().x));
+  const Vec3 contact = sim.data().pair_contact_force[0];
   // How far the balls flattened: the left ball's rightmost node against its rest.
   double flattened = 1.0;
-  for (int i : m.components[0].nodes) flattened = std::min(flattened, -sim.state().x[i].x());
+  for (int i : m.components[0].nodes) flattened = std::min(flattened, -sim.data().x[i].x());
   std::printf(
       "balls: deepest node inside %.3g m; contact on the left ball (%.9g %.3g %.3g) N "
       "(dynamics %.6g N), push %.3g N; closest approach %.3g m\n",

@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "constraints/contact.hpp"
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 #include "support/models.hpp"
 
 namespace phymul {
@@ -45,14 +45,14 @@ Simulator settled_on_slope(double theta, double friction) {
   Simulator flat = block_on_slope(theta, friction, 0.0, false);
   EXPECT_TRUE(flat.relax(0.0, 100000).converged);
   Simulator sim = block_on_slope(theta, friction);
-  sim.state() = flat.state();
-  sim.state().time = 0.0;
+  sim.data() = flat.data();
+  sim.data().time = 0.0;
   return sim;
 }
 
 Vec3 momentum(const Simulator& sim) {
   Vec3 p = Vec3::Zero();
-  for (int i = 0; i < sim.model().node_count(); ++i) p += sim.model().mass[i] * sim.state().v[i];
+  for (int i = 0; i < sim.model().node_count(); ++i) p += sim.model().mass[i] * sim.data().v[i];
   return p;
 }
 
@@ -68,16 +68,16 @@ double sliding_acceleration(double theta, double mu, double* base_slip = nullptr
   Simulator sim = settled_on_slope(theta, mu);
   const double mass = total_mass(sim.model());
   double n = 0, st = 0, sv = 0, stt = 0, stv = 0;
-  while (sim.state().time < 0.3 - 1e-12) {
+  while (sim.data().time < 0.3 - 1e-12) {
     sim.step();
-    const double t = sim.state().time, v = momentum(sim).x() / mass;
+    const double t = sim.data().time, v = momentum(sim).x() / mass;
     n += 1, st += t, sv += v, stt += t * t, stv += t * v;
   }
   if (base_slip) {
     *base_slip = 0.0;
     for (int i = 0; i < sim.model().node_count(); ++i)
       if (sim.model().rest_position[i].z() == 0.0)
-        *base_slip = std::max(*base_slip, sim.state().x[i].x() - sim.model().rest_position[i].x());
+        *base_slip = std::max(*base_slip, sim.data().x[i].x() - sim.model().rest_position[i].x());
   }
   return (n * stv - st * sv) / (n * stt - st * st);
 }
@@ -86,25 +86,25 @@ double largest_base_slip(const Simulator& sim, const std::vector<Vec3>& start) {
   double slip = 0.0;
   for (int i = 0; i < sim.model().node_count(); ++i)
     if (sim.model().rest_position[i].z() == 0.0)
-      slip = std::max(slip, (sim.state().x[i] - start[i]).head<2>().norm());
+      slip = std::max(slip, (sim.data().x[i] - start[i]).head<2>().norm());
   return slip;
 }
 
 TEST(Friction, BlockOnAGentleSlopeStays) {
   const double theta = 10.0 * kPi / 180.0, mu = 0.3;  // tan theta = 0.176 < mu
   Simulator sim = settled_on_slope(theta, mu);
-  const std::vector<Vec3> settled = sim.state().x;
+  const std::vector<Vec3> settled = sim.data().x;
   // The sudden tilt rocks the undamped block: its unloaded up-slope corners slip a few
   // tens of micrometres in the first instants, then (nearly) nothing moves any more.
-  while (sim.state().time < 0.5) sim.step();
+  while (sim.data().time < 0.5) sim.step();
   const double early = largest_base_slip(sim, settled);
   const Vec3 p_early = momentum(sim);
   double late = 0.0, steps = 0;
   Vec3 impulse = Vec3::Zero();
-  while (sim.state().time < 2.0) {
+  while (sim.data().time < 2.0) {
     sim.step();
     late = std::max(late, largest_base_slip(sim, settled));
-    impulse += sim.state().contact_force[0] * sim.dt();
+    impulse += sim.data().contact_force[0] * sim.dt();
     ++steps;
   }
   const double mass = total_mass(sim.model());
@@ -151,7 +151,7 @@ TEST(ContactForce, IsTheMomentumTheObstacleGivesEveryStep) {
     const Vec3 p0 = momentum(sim);
     sim.step();
     const Vec3 expected = (momentum(sim) - p0) / sim.dt() - mass * model.gravity;
-    const Vec3 force = sim.state().contact_force[0];
+    const Vec3 force = sim.data().contact_force[0];
     largest = std::max(largest, force.norm());
     worst = std::max(worst, (force - expected).norm());
   }
@@ -173,11 +173,11 @@ TEST(ContactForce, AtRestEqualsTheWeightAndObstacleForce) {
   finalize(model);
   Simulator sim(model);
   const double weight = total_mass(model) * kG;
-  while (sim.state().time < 1.5) sim.step();  // damped dynamics settle
-  const Vec3 settled = sim.state().contact_force[0];
-  ASSERT_TRUE(sim.relax(sim.state().time, 200000).converged);
-  const Vec3 relaxed = sim.state().contact_force[0];
-  const Vec3 balance = obstacle_force(sim.model(), sim.state(), 0);
+  while (sim.data().time < 1.5) sim.step();  // damped dynamics settle
+  const Vec3 settled = sim.data().contact_force[0];
+  ASSERT_TRUE(sim.relax(sim.data().time, 200000).converged);
+  const Vec3 relaxed = sim.data().contact_force[0];
+  const Vec3 balance = obstacle_force(sim.model(), sim.data(), 0);
   std::printf(
       "at rest: dynamics %.12g N, relaxed %.12g N, obstacle_force %.12g N, weight %.12g N\n",
       settled.z(), relaxed.z(), balance.z(), weight);
@@ -204,8 +204,8 @@ TEST(ContactForce, ProbeForceAgreesWithObstacleForceAndSupports) {
   finalize(model);
   Simulator sim(model);
   ASSERT_TRUE(sim.relax(1.0, 200000).converged);
-  const Vec3 monitored = sim.state().contact_force[0];
-  const Vec3 balance = obstacle_force(sim.model(), sim.state(), 0);
+  const Vec3 monitored = sim.data().contact_force[0];
+  const Vec3 balance = obstacle_force(sim.model(), sim.data(), 0);
   Vec3 support = Vec3::Zero();
   for (const Vec3& r : sim.support_reactions()) support += r;
   std::printf("probe: monitored (%.9g %.9g %.9g) N, obstacle_force (%.9g %.9g %.9g) N\n",

@@ -7,7 +7,7 @@
 #include "constraints/constraints.hpp"
 #include "constraints/coupled_volume.hpp"
 #include "constraints/volume_lanes.hpp"
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 #include "support/models.hpp"
 
 namespace phymul {
@@ -65,7 +65,8 @@ TEST(JointVolumes, OneProjectionHoldsEveryVolumeWhereGaussSeidelNeedsManySweeps)
       ++sweeps;
     }
     std::vector<Vec3> joint = start;
-    project_volumes(m, joint, 0.0, scratch);
+    Data data = allocate_data(m);
+    project_volumes(m, *data.work, joint, 0.0, scratch);
     double moved = 0.0, apart = 0.0;
     for (int i = 0; i < m.node_count(); ++i) {
       moved = std::max(moved, (joint[i] - start[i]).norm());
@@ -88,9 +89,9 @@ TEST(JointVolumes, OneStepHoldsEveryVolume) {
   m.gravity = Vec3(0, 0, -9.81);
   m.damping = 5.0;
   Simulator sim(m);
-  sim.state().x = shaken(m, 7);  // far off both targets: the step's projection puts them back
+  sim.data().x = shaken(m, 7);  // far off both targets: the step's projection puts them back
   sim.step();
-  const double error = worst_relative_error(m, sim.state().x);
+  const double error = worst_relative_error(m, sim.data().x);
   std::printf("after one step: worst relative volume error %.3g\n", error);
   EXPECT_LT(error, 1e-12);
 }
@@ -107,9 +108,12 @@ TEST(JointVolumes, TheChordLandsWithTheGradientsTheVelocityProjectionReuses) {
     for (size_t i = 0; i < x.size(); ++i)
       x[i] = m.rest_position[i] + scale * (far[i] - m.rest_position[i]);
     const double start = worst_relative_error(m, x);
-    ASSERT_TRUE(project_coupled_volumes(m, x, 0.0, grad));
-    bool kept = m.coupled_factor_valid;  // what the velocity projection asks before reusing
-    for (const VolumeConstraint& c : m.volumes) kept = kept && gradient_kept_at(c, x);
+    Data data = allocate_data(m);
+    Workspace& work = *data.work;
+    ASSERT_TRUE(project_coupled_volumes(m, work, x, 0.0, grad));
+    bool kept = work.joint.factor_valid;  // what the velocity projection asks before reusing
+    for (size_t k = 0; k < m.volumes.size(); ++k)
+      kept = kept && gradient_kept_at(m.volumes[k], work.volumes[k], x);
     std::printf("start error %.3g: after %.3g, gradients kept at the result: %s\n", start,
                 worst_relative_error(m, x), kept ? "yes" : "no");
     EXPECT_LT(worst_relative_error(m, x), 1e-12);
@@ -124,10 +128,11 @@ TEST(JointVolumes, VelocityProjectionLeavesNoVolumeRateAndMatchesTheSweepsLimit)
   std::uniform_real_distribution<double> u(-0.1, 0.1);
   std::vector<Vec3> v(size_t(m.node_count()));
   for (int i = 0; i < m.node_count(); ++i)
-    v[i] = testing::random_vec3(u, rng)
-               .cwiseProduct((m.inverse_mass[i].array() > 0.0).cast<double>().matrix());
+    v[i] = testing::random_vec3(u, rng).cwiseProduct(
+        (m.inverse_mass[i].array() > 0.0).cast<double>().matrix());
   std::vector<Vec3> grad(v.size()), joint = v;
-  ASSERT_TRUE(project_coupled_volume_velocities(m, x, joint, grad));
+  Data data = allocate_data(m);
+  ASSERT_TRUE(project_coupled_volume_velocities(m, *data.work, x, joint, grad));
   // Independent reference: the single-constraint rate removal swept to its limit (linear
   // Gauss-Seidel on G W G^T mu = G v converges to the same solution).
   std::vector<Vec3> swept = v;
@@ -175,7 +180,8 @@ TEST(JointVolumes, PressuresRemovedFromAResidualLeaveItOrthogonalToEveryFreeGrad
   for (Vec3& f : r0) f = testing::random_vec3(u, rng);
   for (bool on_free_axes : {true, false}) {
     std::vector<Vec3> r = r0;
-    ASSERT_TRUE(remove_coupled_volume_pressures(m, x, r, grad, on_free_axes));
+    Data data = allocate_data(m);
+    ASSERT_TRUE(remove_coupled_volume_pressures(m, *data.work, x, r, grad, on_free_axes));
     for (const VolumeConstraint& c : m.volumes) {
       volume_gradient(c, x, grad);
       double before = 0.0, after = 0.0, scale = 0.0;

@@ -9,7 +9,7 @@
 #include <random>
 
 #include "phymul/fem.hpp"
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 #include "support/models.hpp"
 
 namespace phymul {
@@ -41,7 +41,9 @@ struct Evaluation {
 
 Evaluation evaluate(const Model& model, const std::vector<Vec3>& x) {
   Evaluation out{std::vector<Vec3>(x.size(), Vec3::Zero()), 0.0};
-  out.energy = add_explicit_fem_forces(model.explicit_fem[0], model.rest_position, x, out.f);
+  std::vector<double> blocks = testing::block_scratch(model.explicit_fem[0].plan);
+  out.energy =
+      add_explicit_fem_forces(model.explicit_fem[0], model.rest_position, x, out.f, blocks);
   return out;
 }
 
@@ -211,7 +213,7 @@ Compression compress(CellType type, int n) {
   const std::vector<Vec3> reaction = sim.support_reactions();
   Compression out{};
   for (int i : top) out.explicit_force -= reaction[i].z();  // the plate pushes down
-  out.explicit_bulge = sim.state().x[corner].x() - mesh.points[corner].x();
+  out.explicit_bulge = sim.data().x[corner].x() - mesh.points[corner].x();
 
   fem::Problem problem;
   problem.mesh = mesh;
@@ -245,7 +247,7 @@ TEST(ExplicitFem, DynamicsStopAtTheFirstInvertedCellAndKeepTheLastGoodState) {
   std::string message;
   double when = -1.0;
   try {
-    while (sim.state().time < 0.2) sim.step();
+    while (sim.data().time < 0.2) sim.step();
   } catch (const InstabilityError& e) {
     message = e.what();
     when = e.time;
@@ -258,9 +260,9 @@ TEST(ExplicitFem, DynamicsStopAtTheFirstInvertedCellAndKeepTheLastGoodState) {
   EXPECT_LT(when, 0.1 * 10.0 / 15.0 + 1e-9);
   // The state kept is the step before: every cell upright, its energy finite (what a run
   // writes), at the time before the failing step.
-  EXPECT_EQ(first_inverted_cell(fem, sim.model().rest_position, sim.state().x).cell, -1);
-  EXPECT_TRUE(std::isfinite(sim.state().shape_memory_energy));
-  EXPECT_NEAR(sim.state().time, when - sim.dt(), 1e-12);
+  EXPECT_EQ(first_inverted_cell(fem, sim.model().rest_position, sim.data().x).cell, -1);
+  EXPECT_TRUE(std::isfinite(sim.data().shape_memory_energy));
+  EXPECT_NEAR(sim.data().time, when - sim.dt(), 1e-12);
 }
 
 TEST(ExplicitFem, CompressedCubeMatchesTheImplicitReference) {

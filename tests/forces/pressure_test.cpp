@@ -4,7 +4,7 @@
 
 #include <random>
 
-#include "forces/forces.hpp"
+#include "phymul/forces.hpp"
 #include "support/models.hpp"
 
 namespace phymul {
@@ -121,7 +121,7 @@ TEST(Pressure, ComputeForcesAddsThePressureAtTheLoadTime) {
   add_pressure(model, {0, top, Schedule{{0.0, 1.0}, {Vec3::Zero(), Vec3(1000.0, 0, 0)}}});
   EXPECT_THROW(add_pressure(model, {3, top, Schedule::constant(Vec3::Zero())}),
                std::invalid_argument);
-  State s = make_state(model);
+  Data s = allocate_data(model);
   compute_forces(model, s, 0.5);
   // At rest the shape memory is balanced: what is left is half the final pressure.
   EXPECT_NEAR(resultant(s.f).z(), -500.0 * 0.04 * 0.04, 1e-9);

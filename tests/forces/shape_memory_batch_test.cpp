@@ -102,7 +102,8 @@ PassAndScalar pass_and_scalar(const Model& model, const Deformed& d) {
                   std::vector<Vec3>(d.x.size(), Vec3::Zero()), d.rotations, d.rotations};
   for (int k = 0; k < int(m.nodes.size()); ++k)
     r.e_scalar += add_polar_node_forces(m, k, model.rest_position, d.x, r.q_scalar, r.f_scalar);
-  r.e_pass = add_shape_memory_forces(m, model.rest_position, d.x, r.q_pass, r.f_pass);
+  std::vector<double> blocks = testing::block_scratch(m.plan);
+  r.e_pass = add_shape_memory_forces(m, model.rest_position, d.x, r.q_pass, r.f_pass, blocks);
   return r;
 }
 
@@ -300,7 +301,8 @@ TEST(ShapeMemoryCentred, ZeroForceUnderARigidMotion) {
   for (const Vec3& X : model.rest_position) x.push_back(R * X + Vec3(0.1, -0.2, 0.05));
   std::vector<Eigen::Quaterniond> q(m.nodes.size(), Eigen::Quaterniond(R));
   std::vector<Vec3> f(x.size(), Vec3::Zero());
-  const double energy = add_shape_memory_forces(m, model.rest_position, x, q, f);
+  std::vector<double> blocks = testing::block_scratch(m.plan);
+  const double energy = add_shape_memory_forces(m, model.rest_position, x, q, f, blocks);
   EXPECT_LT(largest(f), 1e-13);  // K = 50 N/m on 5 mm cells: round-off is ~1e-16 N
   EXPECT_LT(energy, 1e-28);
 }
@@ -318,10 +320,12 @@ TEST(ShapeMemoryCentred, StencilRunsGiveTheNodeByNodeForces) {
   const Deformed d = deformed(model, rng);
   std::vector<Vec3> f_stencil(d.x.size(), Vec3::Zero()), f_nodes = f_stencil;
   std::vector<Eigen::Quaterniond> q_stencil = d.rotations, q_nodes = d.rotations;
+  std::vector<double> blocks = testing::block_scratch(m.plan);
   const double e_stencil =
-      add_shape_memory_forces(m, model.rest_position, d.x, q_stencil, f_stencil);
+      add_shape_memory_forces(m, model.rest_position, d.x, q_stencil, f_stencil, blocks);
   model.shape_memory[0].centred_on_stencil = false;
-  const double e_nodes = add_shape_memory_forces(m, model.rest_position, d.x, q_nodes, f_nodes);
+  const double e_nodes =
+      add_shape_memory_forces(m, model.rest_position, d.x, q_nodes, f_nodes, blocks);
   const double scale = largest(f_nodes);
   double worst = 0.0;
   for (size_t i = 0; i < d.x.size(); ++i)

@@ -4,7 +4,7 @@
 
 #include <random>
 
-#include "forces/forces.hpp"
+#include "phymul/forces.hpp"
 #include "support/models.hpp"
 
 namespace phymul {
@@ -29,7 +29,7 @@ std::vector<Case> cases(FrameMode frame) {
   };
 }
 
-double largest_force(const State& s) {
+double largest_force(const Data& s) {
   double m = 0.0;
   for (const Vec3& f : s.f) m = std::max(m, f.norm());
   return m;
@@ -40,7 +40,7 @@ class ShapeMemoryFrames : public ::testing::TestWithParam<FrameMode> {};
 TEST_P(ShapeMemoryFrames, ZeroAtRest) {
   for (Case& c : cases(GetParam())) {
     const Model model = testing::single_component(c.mesh, c.material);
-    State s = make_state(model);
+    Data s = allocate_data(model);
     compute_forces(model, s, 0.0);
     // K = 50 N/m on cm-sized meshes: round-off forces are ~1e-16 N.
     EXPECT_LT(largest_force(s), 1e-13) << c.name;
@@ -52,7 +52,7 @@ TEST_P(ShapeMemoryFrames, ZeroUnderRandomRigidMotions) {
   std::uniform_real_distribution<double> shift(-0.5, 0.5);
   for (Case& c : cases(GetParam())) {
     const Model model = testing::single_component(c.mesh, c.material);
-    State s = make_state(model);
+    Data s = allocate_data(model);
     for (int trial = 0; trial < 20; ++trial) {
       const Eigen::Matrix3d R = testing::random_rotation(rng);
       const Vec3 t = testing::random_vec3(shift, rng);
@@ -74,7 +74,7 @@ TEST_P(ShapeMemoryFrames, PullsADisplacedNodeBack) {
   int centre = 0;
   for (int i = 0; i < model.node_count(); ++i)
     if (model.rest_position[i].norm() < 1e-9) centre = i;
-  State s = make_state(model);
+  Data s = allocate_data(model);
   const Vec3 delta(0.001, -0.002, 0.0015);
   s.x[centre] += delta;
   compute_forces(model, s, 0.0);
@@ -94,7 +94,7 @@ TEST(ShapeMemory, ReactionKeepsMomentum) {
   const Mesh mesh = make_box(Vec3(0.03, 0.03, 0.03), {3, 3, 3}, CellType::hexa);
   for (bool reaction : {true, false}) {
     const Model model = testing::single_component(mesh, material(40.0, FrameMode::polar, reaction));
-    State s = make_state(model);
+    Data s = allocate_data(model);
     for (Vec3& x : s.x) x += testing::random_vec3(jitter, rng);
     compute_forces(model, s, 0.0);
     Vec3 total = Vec3::Zero();
@@ -132,11 +132,11 @@ TEST(ShapeMemory, PolarReactionForcesAreTheEnergyGradient) {
   std::normal_distribution<double> jitter(0.0, 2e-3);
   for (Case& c : cases(FrameMode::polar)) {
     const Model model = testing::single_component(c.mesh, c.material);
-    State s = make_state(model);
+    Data s = allocate_data(model);
     for (Vec3& x : s.x) x += testing::random_vec3(jitter, rng);
     compute_forces(model, s, 0.0);
     auto energy = [&](const std::vector<Vec3>& x) {
-      State probe = s;
+      Data probe = s;
       probe.x = x;
       compute_forces(model, probe, 0.0);
       return probe.shape_memory_energy;

@@ -54,7 +54,7 @@ std::vector<double> write_frames(ResultWriter& writer, Simulator& sim, int frame
   for (int k = 0; k < frames; ++k) {
     sim.step();
     writer.frame(sim);
-    times.push_back(sim.state().time);
+    times.push_back(sim.data().time);
   }
   return times;
 }

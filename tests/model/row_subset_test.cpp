@@ -1,5 +1,5 @@
 // RowSubset, and the shape memory's per-node data kept only for the nodes that use them.
-#include "phymul/row_subset.hpp"
+#include "model/row_subset.hpp"
 
 #include <gtest/gtest.h>
 

@@ -5,9 +5,9 @@
 #include <random>
 
 #include "constraints/doubled.hpp"
-#include "forces/forces.hpp"
 #include "forces/shape_memory.hpp"
-#include "phymul/simulator.hpp"
+#include "phymul/forces.hpp"
+#include "phymul/simulation.hpp"
 #include "support/models.hpp"
 
 namespace phymul {
@@ -65,7 +65,7 @@ TEST(Stitch, SharedNodeFeelsTheShapeMemoryOfBothComponents) {
   Model model = two_blocks();
   stitch_nodes(model, face_pairs(model));
   finalize(model);
-  State s = make_state(model);
+  Data s = allocate_data(model);
   compute_forces(model, s, 0.0);
   for (const Vec3& f : s.f) EXPECT_LT(f.norm(), 1e-12);  // rest: no force
   // Move one shared node on the face centre: its force is the sum of both memories'
@@ -79,10 +79,12 @@ TEST(Stitch, SharedNodeFeelsTheShapeMemoryOfBothComponents) {
   std::vector<Vec3> f_left(s.f.size(), Vec3::Zero()), f_right(s.f.size(), Vec3::Zero());
   std::vector<Eigen::Quaterniond> q(s.rotation.size(), Eigen::Quaterniond::Identity());
   const size_t n_left = model.shape_memory[0].nodes.size();
+  std::vector<double> left = testing::block_scratch(model.shape_memory[0].plan),
+                      right = testing::block_scratch(model.shape_memory[1].plan);
   add_shape_memory_forces(model.shape_memory[0], model.rest_position, s.x,
-                          std::span(q.data(), n_left), f_left);
+                          std::span(q.data(), n_left), f_left, left);
   add_shape_memory_forces(model.shape_memory[1], model.rest_position, s.x,
-                          std::span(q.data() + n_left, q.size() - n_left), f_right);
+                          std::span(q.data() + n_left, q.size() - n_left), f_right, right);
   EXPECT_LT((s.f[centre] - f_left[centre] - f_right[centre]).norm(), 1e-15);
   // Both pull it back, and the stiffer block (K = 40 vs 10 N/m) pulls harder.
   const Vec3 d = Vec3(1e-4, 2e-5, -3e-5);
@@ -103,16 +105,16 @@ void shake(Simulator& sim, unsigned seed) {
   double mass = 0.0;
   for (int i = 0; i < model.node_count(); ++i) {
     const Vec3& x = model.rest_position[i];
-    sim.state().v[i] = 0.5 * A * x + 1e-3 * Vec3(std::sin(300 * x.x()), std::cos(200 * x.y()), 0);
-    p += model.mass[i] * sim.state().v[i];
+    sim.data().v[i] = 0.5 * A * x + 1e-3 * Vec3(std::sin(300 * x.x()), std::cos(200 * x.y()), 0);
+    p += model.mass[i] * sim.data().v[i];
     mass += model.mass[i];
   }
-  for (Vec3& v : sim.state().v) v -= p / mass;
+  for (Vec3& v : sim.data().v) v -= p / mass;
 }
 
 Vec3 momentum(const Simulator& sim) {
   Vec3 p = Vec3::Zero();
-  for (int i = 0; i < sim.model().node_count(); ++i) p += sim.model().mass[i] * sim.state().v[i];
+  for (int i = 0; i < sim.model().node_count(); ++i) p += sim.model().mass[i] * sim.data().v[i];
   return p;
 }
 
@@ -125,7 +127,7 @@ TEST(Stitch, FreeStitchedAssemblyKeepsItsMomentumWithTheReactionOption) {
   shake(sim, 5);
   const Vec3 p0 = momentum(sim);
   double scale = 0.0;
-  for (int i = 0; i < model.node_count(); ++i) scale += model.mass[i] * sim.state().v[i].norm();
+  for (int i = 0; i < model.node_count(); ++i) scale += model.mass[i] * sim.data().v[i].norm();
   for (int k = 0; k < 2000; ++k) sim.step();
   EXPECT_LT((momentum(sim) - p0).norm(), 1e-10 * scale);
 }
@@ -162,7 +164,7 @@ TEST(Stitch, SurfaceWithVolumeConstraintStitchedThroughOneNode) {
   const int shared = model.components[1].node_sets.at("bottom").front();
   for (int k = 0; k < 2000; ++k) sim.step();
   // The prostate hangs from the bladder through the shared node, which went down.
-  EXPECT_LT(sim.state().x[shared].z(), model.rest_position[shared].z() - 1e-4);
+  EXPECT_LT(sim.data().x[shared].z(), model.rest_position[shared].z() - 1e-4);
   EXPECT_NEAR(sim.component_volumes()[1], volume0, 1e-10 * volume0);
 }
 
@@ -175,13 +177,13 @@ TEST(Doubled, DoubledNodesCoincideAtEveryStepAndKeepMomentum) {
   shake(sim, 7);
   const Vec3 p0 = momentum(sim);
   double scale = 0.0;
-  for (int i = 0; i < model.node_count(); ++i) scale += model.mass[i] * sim.state().v[i].norm();
+  for (int i = 0; i < model.node_count(); ++i) scale += model.mass[i] * sim.data().v[i].norm();
   const auto pairs = sim.model().doubled_pairs;
   for (int k = 0; k < 2000; ++k) {
     sim.step();
     for (const auto& [a, b] : pairs) {
-      ASSERT_EQ(sim.state().x[a], sim.state().x[b]) << "step " << k;
-      ASSERT_EQ(sim.state().v[a], sim.state().v[b]) << "step " << k;
+      ASSERT_EQ(sim.data().x[a], sim.data().x[b]) << "step " << k;
+      ASSERT_EQ(sim.data().v[a], sim.data().v[b]) << "step " << k;
     }
   }
   EXPECT_LT((momentum(sim) - p0).norm(), 1e-10 * scale);
@@ -211,8 +213,8 @@ TEST(Doubled, MovesLikeTheStitchedAssembly) {
     for (int c = 0; c < 2; ++c)
       for (size_t k = 0; k < stitched.components[c].nodes.size(); ++k) {
         const int i = a.model().components[c].nodes[k], j = b.model().components[c].nodes[k];
-        worst = std::max(worst, (a.state().x[i] - b.state().x[j]).norm());
-        largest = std::max(largest, (b.state().x[j] - doubled.rest_position[j]).norm());
+        worst = std::max(worst, (a.data().x[i] - b.data().x[j]).norm());
+        largest = std::max(largest, (b.data().x[j] - doubled.rest_position[j]).norm());
       }
     EXPECT_GT(largest, 1e-3);  // it sagged by millimetres
     EXPECT_LT(worst, 1e-9 * largest) << (integrator == Integrator::verlet ? "verlet" : "nc");
@@ -232,11 +234,11 @@ TEST(Doubled, AHeldMemberHoldsItsPartner) {
   Simulator sim(model);
   for (int k = 0; k < 500; ++k) sim.step();
   for (const auto& [a, b] : pairs) {
-    EXPECT_EQ(sim.state().x[a], model.rest_position[a]);
-    EXPECT_EQ(sim.state().x[b], model.rest_position[a]);
+    EXPECT_EQ(sim.data().x[a], model.rest_position[a]);
+    EXPECT_EQ(sim.data().x[b], model.rest_position[a]);
   }
   // The right block hangs from the left one's face: it moved.
-  EXPECT_GT((sim.state().x[model.components[1].nodes.back()] -
+  EXPECT_GT((sim.data().x[model.components[1].nodes.back()] -
              model.rest_position[model.components[1].nodes.back()])
                 .norm(),
             1e-4);

@@ -10,7 +10,7 @@
 #include <new>
 #include <utility>
 
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 #include "support/models.hpp"
 
 // AddressSanitizer brings its own operator new; replacing it there mixes allocators.

@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "phymul/scene.hpp"
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 
 namespace phymul {
 namespace {
@@ -69,12 +69,12 @@ TEST(MassScaling, KeepsTheEquilibrium) {
   Simulator plain = hanging_block("");
   Simulator scaled = hanging_block(
       fmt::format(", mass_scaling_dt: {:.17g} s", 1.5 * stable_time_step(plain.model())));
-  while (plain.state().time < 3.0) plain.step();
-  while (scaled.state().time < 3.0) scaled.step();
+  while (plain.data().time < 3.0) plain.step();
+  while (scaled.data().time < 3.0) scaled.step();
   double sag = 0.0, apart = 0.0;
-  for (size_t i = 0; i < plain.state().x.size(); ++i) {
-    sag = std::max(sag, (plain.state().x[i] - plain.model().rest_position[i]).norm());
-    apart = std::max(apart, (plain.state().x[i] - scaled.state().x[i]).norm());
+  for (size_t i = 0; i < plain.data().x.size(); ++i) {
+    sag = std::max(sag, (plain.data().x[i] - plain.model().rest_position[i]).norm());
+    apart = std::max(apart, (plain.data().x[i] - scaled.data().x[i]).norm());
   }
   EXPECT_GT(sag, 1e-3);  // it hangs visibly
   EXPECT_LT(apart, 1e-6 * sag);

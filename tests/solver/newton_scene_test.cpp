@@ -12,7 +12,7 @@
 #include "phymul/model.hpp"
 #include "phymul/run.hpp"
 #include "phymul/scene.hpp"
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 #include "solver/newton_run.hpp"
 #include "support/process.hpp"
 #include "support/results.hpp"
@@ -29,7 +29,7 @@ struct Solved {
 Solved solve_newton(const std::string& text) {
   const Scene scene = parse_scene(text, "newton.yaml");
   Solved s{compile_scene(scene), {}, {}};
-  s.problem = newton_problem(scene, s.model);
+  s.problem = newton_problem(s.model);
   s.result = fem::solve_static(s.problem);
   return s;
 }
@@ -138,7 +138,7 @@ TEST(NewtonScene, TetrahedralCantileverMatchesTheRelaxedExplicitElements) {
   for (int i = 0; i < newton.model.node_count(); ++i) {
     const Vec3& u = newton.result.displacement[size_t(i)];
     tip = std::max(tip, -u.z());
-    const Vec3 relaxed_u = relaxed.state().x[size_t(i)] - relaxed.model().rest_position[size_t(i)];
+    const Vec3 relaxed_u = relaxed.data().x[size_t(i)] - relaxed.model().rest_position[size_t(i)];
     largest_difference = std::max(largest_difference, (u - relaxed_u).norm());
   }
   EXPECT_GT(tip, 0.004);  // a large deflection: the nonlinearity is exercised

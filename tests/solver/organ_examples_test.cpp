@@ -4,7 +4,7 @@
 
 #include <filesystem>
 
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 #include "solver/rigid.hpp"
 
 namespace phymul {
@@ -56,9 +56,9 @@ TEST(OrganExamples, LigamentStaticEquilibriumMatchesTheHandCalculation) {
   // balance, and by symmetry it hangs straight, centred under the ligament.
   const int lower = body_of(model, "lower_bone");
   Vec3 force, torque;
-  rigid_load(model, sim.state(), lower, force, torque, false);
+  rigid_load(model, sim.data(), lower, force, torque, false);
   EXPECT_LT(force.norm(), 1e-6);
-  const RigidBodyState& b = sim.state().bodies[lower];
+  const RigidBodyState& b = sim.data().bodies[lower];
   EXPECT_LT(b.center.head<2>().norm(), 1e-9);
   EXPECT_LT(b.orientation.angularDistance(model.rigid_bodies[lower].rest_orientation), 1e-9);
   // It went down: the ligament stretched under (bone + load) = 0.175 N.
@@ -76,14 +76,14 @@ TEST(OrganExamples, MuscleLiftsTheLoad) {
   Simulator sim(compile_scene(load_scene(kExamples / "muscle.yaml")));
   const Model& model = sim.model();
   const int lower = body_of(model, "lower_bone");
-  auto height = [&] { return sim.state().bodies[lower].center.z(); };
+  auto height = [&] { return sim.data().bodies[lower].center.z(); };
   double before = 0.0, lowest = 1.0;
-  while (sim.state().time < model.settings.duration) {
+  while (sim.data().time < model.settings.duration) {
     sim.step();
-    if (sim.state().time <= 0.5) before = height();  // sagged under the load, inactive
+    if (sim.data().time <= 0.5) before = height();  // sagged under the load, inactive
     lowest = std::min(lowest, height());
     // The muscle's end nodes move with the bones, at every step.
-    for (const auto& [a, b] : model.doubled_pairs) ASSERT_EQ(sim.state().x[a], sim.state().x[b]);
+    for (const auto& [a, b] : model.doubled_pairs) ASSERT_EQ(sim.data().x[a], sim.data().x[b]);
   }
   const double rest = model.rigid_bodies[lower].rest_center.z();
   EXPECT_LT(before, rest);  // the load stretched the passive muscle

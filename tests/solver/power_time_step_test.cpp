@@ -8,8 +8,8 @@
 #include <cmath>
 #include <numbers>
 
-#include "forces/forces.hpp"
-#include "phymul/simulator.hpp"
+#include "phymul/forces.hpp"
+#include "phymul/simulation.hpp"
 #include "support/models.hpp"
 
 namespace phymul {
@@ -55,7 +55,7 @@ TEST(PowerTimeStep, BracketsASpringChainsHighestFrequency) {
   }
   const double exact =
       std::sqrt(4.0 * kK / m) * std::sin(kFree * std::numbers::pi / (2.0 * (kFree + 1)));
-  const State rest = make_state(model);
+  const Data rest = allocate_data(model);
   const FrequencyEstimate e = highest_frequency(model, rest, model.mass);
   // The Rayleigh quotient from below, its residual's interval above, both tight.
   EXPECT_LE(std::sqrt(e.rayleigh), exact * (1.0 + 1e-7));
@@ -79,7 +79,7 @@ TEST(PowerTimeStep, MatchesADenseEigensolveOnAShapeMemorySurface) {
                         testing::surface_material(500.0, 0.01, FrameMode::polar));
   add_fixed_nodes(model, model.components[0].node_sets.at("top"));
   finalize(model);
-  State rest = make_state(model);
+  Data rest = allocate_data(model);
   compute_forces(model, rest, 0.0);
   std::vector<int> dof;
   for (int i = 0; i < model.node_count(); ++i)
@@ -89,7 +89,7 @@ TEST(PowerTimeStep, MatchesADenseEigensolveOnAShapeMemorySurface) {
   Eigen::MatrixXd a(n, n);
   const double h = 1e-8;  // m
   for (int col = 0; col < n; ++col) {
-    State plus = rest, minus = rest;
+    Data plus = rest, minus = rest;
     plus.x[size_t(dof[col] / 3)][dof[col] % 3] += h;
     minus.x[size_t(dof[col] / 3)][dof[col] % 3] -= h;
     compute_forces(model, plus, 0.0);
@@ -121,7 +121,7 @@ TEST(PowerTimeStep, TheSceneStepIsItsShareOfTheSharpLimit) {
   model.settings.dt_estimate = DtEstimate::power;
   model.settings.dt_safety = 0.9;
   const Simulator sim(model);
-  const FrequencyEstimate e = highest_frequency(sim.model(), sim.state(), sim.inertia());
+  const FrequencyEstimate e = highest_frequency(sim.model(), sim.data(), sim.inertia());
   const double xi = 5.0 / (2.0 * e.omega());
   const double limit = 2.0 / e.omega() * (std::sqrt(1.0 + xi * xi) - xi);
   EXPECT_NEAR(sim.stable_dt(), limit, 1e-9 * limit);
@@ -133,7 +133,7 @@ TEST(PowerTimeStep, TheSceneStepIsItsShareOfTheSharpLimit) {
     run.set_dt(share * run.stable_dt());
     for (int i = 0; i < run.model().node_count(); ++i) {
       const long j = std::lround(run.model().rest_position[size_t(i)].x() / kEdge + 100.0);
-      run.state().v[size_t(i)] = Vec3(j % 2 == 0 ? 1e-4 : -1e-4, 0.0, 0.0);
+      run.data().v[size_t(i)] = Vec3(j % 2 == 0 ? 1e-4 : -1e-4, 0.0, 0.0);
     }
     return run;
   };
@@ -141,8 +141,8 @@ TEST(PowerTimeStep, TheSceneStepIsItsShareOfTheSharpLimit) {
   for (int k = 0; k < 300; ++k) below.step();
   double largest = 0.0;
   for (int i = 0; i < below.model().node_count(); ++i)
-    largest = std::max(
-        largest, (below.state().x[size_t(i)] - below.model().rest_position[size_t(i)]).norm());
+    largest = std::max(largest,
+                       (below.data().x[size_t(i)] - below.model().rest_position[size_t(i)]).norm());
   EXPECT_LT(largest, 2e-7);  // m
   Simulator above = kicked(1.03);
   try {
@@ -152,7 +152,7 @@ TEST(PowerTimeStep, TheSceneStepIsItsShareOfTheSharpLimit) {
     EXPECT_NE(std::string(error.what()).find("a runaway, caught before any number overflowed"),
               std::string::npos)
         << error.what();
-    EXPECT_LT(above.state().step, 100);
+    EXPECT_LT(above.data().step, 100);
   }
 }
 

@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 #include "support/models.hpp"
 
 namespace phymul {
@@ -37,16 +37,16 @@ TEST(RigidBody, FreeBodyFallsAsHalfGTSquared) {
   model.settings.dt = 1e-4;
   finalize(model);
   Simulator sim(model);
-  const Vec3 c0 = sim.state().bodies[0].center;
+  const Vec3 c0 = sim.data().bodies[0].center;
   // 0.15 s: 11 cm, within the stability guard's 10 model sizes.
   for (int k = 0; k < 1500; ++k) sim.step();
-  const double t = sim.state().time;
-  const double drop = c0.z() - sim.state().bodies[0].center.z();
+  const double t = sim.data().time;
+  const double drop = c0.z() - sim.data().bodies[0].center.z();
   EXPECT_NEAR(drop, 0.5 * 9.81 * t * t, 1e-12);
   // Every node moved by the same amount, and the body did not turn.
   for (int i = 0; i < model.node_count(); ++i) {
-    EXPECT_NEAR((sim.state().x[i] - model.rest_position[i] - Vec3(0, 0, -drop)).norm(), 0.0, 1e-12);
-    EXPECT_NEAR(sim.state().v[i].z(), -9.81 * t, 1e-12);
+    EXPECT_NEAR((sim.data().x[i] - model.rest_position[i] - Vec3(0, 0, -drop)).norm(), 0.0, 1e-12);
+    EXPECT_NEAR(sim.data().v[i].z(), -9.81 * t, 1e-12);
   }
 }
 
@@ -87,10 +87,10 @@ TEST(RigidBody, TorqueFreeAsymmetricBodyKeepsAngularMomentumAndTumblesCorrectly)
   ASSERT_GT(r.inertia[2] - r.inertia[1], 0.1 * r.inertia[1]);
   // Near the intermediate axis: the body flips over (Dzhanibekov), a demanding motion.
   const Vec3 w0(0.3, 20.0, 0.5);  // rad/s, principal frame
-  RigidBodyState& body = sim.state().bodies[0];
+  RigidBodyState& body = sim.data().bodies[0];
   const Eigen::Matrix3d R0 = body.orientation.toRotationMatrix();
   body.angular_momentum = R0 * r.inertia.cwiseProduct(w0);
-  place_rigid_nodes(sim.model(), sim.state());
+  place_rigid_nodes(sim.model(), sim.data());
   const Vec3 L0 = body.angular_momentum;
   const double energy0 = 0.5 * w0.dot(r.inertia.cwiseProduct(w0));
   EXPECT_NEAR(sim.kinetic_energy(), energy0, 1e-12 * energy0);  // nodes move with the body
@@ -106,7 +106,7 @@ TEST(RigidBody, TorqueFreeAsymmetricBodyKeepsAngularMomentumAndTumblesCorrectly)
     Vec3 L = Vec3::Zero();
     for (int i : r.nodes)
       L += sim.model().mass[i] *
-           (sim.state().x[i] - sim.state().bodies[0].center).cross(sim.state().v[i]);
+           (sim.data().x[i] - sim.data().bodies[0].center).cross(sim.data().v[i]);
     worst_momentum = std::max(worst_momentum, (L - L0).norm() / L0.norm());
     worst_energy = std::max(worst_energy, std::abs(sim.kinetic_energy() / energy0 - 1.0));
   }
@@ -114,7 +114,7 @@ TEST(RigidBody, TorqueFreeAsymmetricBodyKeepsAngularMomentumAndTumblesCorrectly)
   // 7.5e-7 rad from the reference after three flips.
   EXPECT_LT(worst_momentum, 1e-12);
   EXPECT_LT(worst_energy, 1e-6);
-  const Eigen::Quaterniond q = sim.state().bodies[0].orientation;
+  const Eigen::Quaterniond q = sim.data().bodies[0].orientation;
   const double angle = q.angularDistance(ref.q);
   EXPECT_LT(angle, 1e-5) << "reference w " << ref.w.transpose();
   // And it did flip: the spin about the intermediate axis reversed.
@@ -130,14 +130,14 @@ TEST(RigidBody, ConvergesToTheReferenceAtSecondOrder) {
     Simulator sim(model);
     const RigidBody& r = sim.model().rigid_bodies[0];
     const Vec3 w0(2.0, 8.0, 3.0);
-    RigidBodyState& body = sim.state().bodies[0];
+    RigidBodyState& body = sim.data().bodies[0];
     body.angular_momentum = body.orientation.toRotationMatrix() * r.inertia.cwiseProduct(w0);
-    place_rigid_nodes(sim.model(), sim.state());
+    place_rigid_nodes(sim.model(), sim.data());
     Reference ref{r.inertia, w0, body.orientation};
     const int steps = int(std::lround(0.5 / dt));
     for (int k = 0; k < steps; ++k) sim.step();
     for (int k = 0; k < steps * 20; ++k) ref.step(dt / 20.0);
-    return sim.state().bodies[0].orientation.angularDistance(ref.q);
+    return sim.data().bodies[0].orientation.angularDistance(ref.q);
   };
   const double coarse = error_with(2e-3), fine = error_with(1e-3);
   EXPECT_GT(coarse / fine, 3.5);
@@ -153,12 +153,12 @@ TEST(RigidBody, DrivenBodyFollowsItsSchedules) {
   finalize(model);
   Simulator sim(model);
   for (int k = 0; k < 600; ++k) sim.step();
-  const double t = sim.state().time;
+  const double t = sim.data().time;
   const Vec3 c0 = sim.model().rigid_bodies[0].rest_center;
   const Eigen::Matrix3d R = Eigen::AngleAxisd(0.5 * t, Vec3::UnitZ()).toRotationMatrix();
   for (int i = 0; i < model.node_count(); ++i) {
     const Vec3 expected = c0 + Vec3(0.01, 0.0, -0.02) * t + R * (model.rest_position[i] - c0);
-    EXPECT_NEAR((sim.state().x[i] - expected).norm(), 0.0, 1e-12);
+    EXPECT_NEAR((sim.data().x[i] - expected).norm(), 0.0, 1e-12);
   }
 }
 
@@ -184,33 +184,33 @@ TEST(RigidBody, FreeRigidElasticAssemblyKeepsItsMomentum) {
   std::mt19937 rng(3);
   std::normal_distribution<double> n(0.0, 1e-2);
   for (int i = 0; i < model.node_count(); ++i)
-    if (sim.model().rigid_body_of[i] < 0) sim.state().v[i] = testing::random_vec3(n, rng);
+    if (sim.model().rigid_body_of[i] < 0) sim.data().v[i] = testing::random_vec3(n, rng);
   auto momentum = [&] {
-    Vec3 p = sim.state().bodies[0].momentum;
+    Vec3 p = sim.data().bodies[0].momentum;
     for (int i = 0; i < model.node_count(); ++i)
-      if (sim.model().rigid_body_of[i] < 0) p += sim.model().mass[i] * sim.state().v[i];
+      if (sim.model().rigid_body_of[i] < 0) p += sim.model().mass[i] * sim.data().v[i];
     return p;
   };
   auto angular = [&] {
-    const RigidBodyState& b = sim.state().bodies[0];
+    const RigidBodyState& b = sim.data().bodies[0];
     Vec3 l = b.angular_momentum + b.center.cross(b.momentum);
     for (int i = 0; i < model.node_count(); ++i)
       if (sim.model().rigid_body_of[i] < 0)
-        l += sim.model().mass[i] * sim.state().x[i].cross(sim.state().v[i]);
+        l += sim.model().mass[i] * sim.data().x[i].cross(sim.data().v[i]);
     return l;
   };
   const Vec3 p0 = momentum(), l0 = angular();
   double scale = 0.0;  // kg m/s
   for (int i = 0; i < model.node_count(); ++i)
-    scale += sim.model().mass[i] * sim.state().v[i].norm();
+    scale += sim.model().mass[i] * sim.data().v[i].norm();
   for (int k = 0; k < 2000; ++k) sim.step();
   // Round-off of 2000 steps of force sums, as for a free elastic body.
   EXPECT_LT((momentum() - p0).norm(), 1e-10 * scale);
   EXPECT_LT((angular() - l0).norm(), 1e-10 * scale * 0.02);
   // The node momentum of the rigid body agrees with the body's own.
   Vec3 nodes = Vec3::Zero();
-  for (int i : sim.model().rigid_bodies[0].nodes) nodes += sim.model().mass[i] * sim.state().v[i];
-  EXPECT_LT((nodes - sim.state().bodies[0].momentum).norm(), 1e-12 * scale);
+  for (int i : sim.model().rigid_bodies[0].nodes) nodes += sim.model().mass[i] * sim.data().v[i];
+  EXPECT_LT((nodes - sim.data().bodies[0].momentum).norm(), 1e-12 * scale);
 }
 
 TEST(RigidBody, DegenerateBodiesAreRefused) {
@@ -263,13 +263,13 @@ TEST(RigidBody, StaticLoadStepsMoveADrivenBody) {
   const StaticResult r = sim.solve_static();
   ASSERT_TRUE(r.converged);
   for (int i : sim.model().rigid_bodies[0].nodes)
-    EXPECT_NEAR((sim.state().x[i] - model.rest_position[i] - Vec3(0, 0, 0.002)).norm(), 0.0, 1e-12);
+    EXPECT_NEAR((sim.data().x[i] - model.rest_position[i] - Vec3(0, 0, 0.002)).norm(), 0.0, 1e-12);
   // The block is stretched: its mid-height nodes rose by about half the plate's move.
   double mid = 0.0;
   int count = 0;
   for (int i : model.components[block].nodes)
     if (std::abs(model.rest_position[i].z() - 0.01) < 1e-9)
-      mid += sim.state().x[i].z() - model.rest_position[i].z(), ++count;
+      mid += sim.data().x[i].z() - model.rest_position[i].z(), ++count;
   mid /= count;
   EXPECT_GT(mid, 0.3 * 0.002);
   EXPECT_LT(mid, 0.7 * 0.002);
@@ -292,9 +292,9 @@ TEST(RigidBody, ALoadOnACornerGivesForceAndTorque) {
   Simulator sim(model);
   const Vec3 r0 = model.rest_position[0] - sim.model().rigid_bodies[0].rest_center;
   for (int k = 0; k < 100; ++k) sim.step();
-  const double t = sim.state().time;
-  EXPECT_LT((sim.state().bodies[0].momentum - F * t).norm(), 1e-15 * F.norm());
-  const Vec3 L = sim.state().bodies[0].angular_momentum;
+  const double t = sim.data().time;
+  EXPECT_LT((sim.data().bodies[0].momentum - F * t).norm(), 1e-15 * F.norm());
+  const Vec3 L = sim.data().bodies[0].angular_momentum;
   const Vec3 expected = r0.cross(F) * t;
   // The body turns by alpha t^2 / 2 ~ 1e-5 rad over the run, so the lever arm changes by
   // that little (measured: 5.6e-7 relative).

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 #include "solver/runaway_guard.hpp"
 #include "support/models.hpp"
 
@@ -34,10 +34,10 @@ class Runaway3x : public ::testing::TestWithParam<Integrator> {};
 TEST_P(Runaway3x, StoppedByTheGuardWithTheLastGoodStateKept) {
   Simulator sim(jelly(GetParam(), 3.0));
   const double edge = 0.005;  // m, the box's cell size
-  State before;
+  Data before;
   try {
     for (int k = 0; k < 1000; ++k) {
-      before = sim.state();
+      before = sim.data();
       sim.step();
     }
     FAIL() << "1000 steps at 3 times the stable step ran through";
@@ -47,14 +47,14 @@ TEST_P(Runaway3x, StoppedByTheGuardWithTheLastGoodStateKept) {
     EXPECT_NE(m.find("component 'jelly'"), std::string::npos) << m;
     EXPECT_NE(m.find("stability estimate"), std::string::npos) << m;
     EXPECT_NE(m.find("set simulation.dt smaller"), std::string::npos) << m;
-    EXPECT_LT(sim.state().step, 10);  // caught as the growth starts (34x per step at 3x)
-    EXPECT_EQ(sim.state().step, before.step);
-    EXPECT_EQ(sim.state().time, before.time);
+    EXPECT_LT(sim.data().step, 10);  // caught as the growth starts (34x per step at 3x)
+    EXPECT_EQ(sim.data().step, before.step);
+    EXPECT_EQ(sim.data().time, before.time);
     for (int i = 0; i < sim.model().node_count(); ++i) {
-      EXPECT_EQ(sim.state().x[i], before.x[i]) << i;
-      EXPECT_EQ(sim.state().v[i], before.v[i]) << i;
-      EXPECT_TRUE(sim.state().f[i].allFinite()) << i;
-      EXPECT_LT((sim.state().x[i] - sim.model().rest_position[i]).norm(), edge) << i;
+      EXPECT_EQ(sim.data().x[i], before.x[i]) << i;
+      EXPECT_EQ(sim.data().v[i], before.v[i]) << i;
+      EXPECT_TRUE(sim.data().f[i].allFinite()) << i;
+      EXPECT_LT((sim.data().x[i] - sim.model().rest_position[i]).norm(), edge) << i;
     }
     EXPECT_LT(sim.kinetic_energy(), 1e-3);  // J; the old criterion let it reach ~24 J
   }
@@ -73,7 +73,7 @@ TEST(RunawayGuard, QuietAtTheStableStep) {
 TEST(RunawayGuard, RigidMotionIsNotARunawayButANeighbourJumpIs) {
   const Model model = testing::single_component(
       make_box(Vec3(0.02, 0.02, 0.02), {4, 4, 4}, CellType::hexa), testing::material(50.0));
-  const std::vector<double> edges = runaway_edges(model);
+  const std::vector<double>& edges = model.runaway_edge;
   for (double e : edges) EXPECT_NEAR(e, 0.005, 1e-15);
   const std::vector<Vec3>& rest = model.rest_position;
   // A translation by 10 edges and a small rotation in one step: no runaway.
@@ -100,7 +100,7 @@ TEST(RunawayGuard, HeldNodesAreNotWatched) {
                                       testing::material(50.0));
   add_fixed_nodes(model, model.components[c].node_sets.at("top"));
   finalize(model);
-  const std::vector<double> edges = runaway_edges(model);
+  const std::vector<double>& edges = model.runaway_edge;
   for (int i : model.components[c].node_sets.at("top")) EXPECT_TRUE(std::isinf(edges[i]));
   EXPECT_EQ(edges[0], 0.01);
 }

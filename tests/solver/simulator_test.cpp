@@ -1,9 +1,8 @@
-#include "phymul/simulator.hpp"
-
 #include <gtest/gtest.h>
 
 #include <random>
 
+#include "phymul/simulation.hpp"
 #include "support/models.hpp"
 
 namespace phymul {
@@ -21,14 +20,14 @@ Simulator vibrating_block(Integrator integrator, double dt_fraction) {
   std::mt19937 rng(1);
   std::normal_distribution<double> n(0.0, 1e-3);
   Vec3 mean = Vec3::Zero();
-  for (Vec3& v : sim.state().v) v = testing::random_vec3(n, rng), mean += v;
-  mean /= double(sim.state().v.size());
-  for (Vec3& v : sim.state().v) v -= mean;
+  for (Vec3& v : sim.data().v) v = testing::random_vec3(n, rng), mean += v;
+  mean /= double(sim.data().v.size());
+  for (Vec3& v : sim.data().v) v -= mean;
   return sim;
 }
 
 double total_energy(const Simulator& sim) {
-  return sim.kinetic_energy() + sim.state().shape_memory_energy;
+  return sim.kinetic_energy() + sim.data().shape_memory_energy;
 }
 
 TEST(Simulator, UndampedVerletConservesEnergy) {
@@ -48,13 +47,13 @@ TEST(Simulator, ReactionFormKeepsMomentumOfAFreeBody) {
   Simulator sim = vibrating_block(Integrator::verlet, 0.3);
   auto momentum = [&] {
     Vec3 p = Vec3::Zero();
-    for (int i = 0; i < sim.model().node_count(); ++i) p += sim.model().mass[i] * sim.state().v[i];
+    for (int i = 0; i < sim.model().node_count(); ++i) p += sim.model().mass[i] * sim.data().v[i];
     return p;
   };
   const Vec3 p0 = momentum();
   double scale = 0.0;
   for (int i = 0; i < sim.model().node_count(); ++i)
-    scale += sim.model().mass[i] * sim.state().v[i].norm();
+    scale += sim.model().mass[i] * sim.data().v[i].norm();
   for (int k = 0; k < 1000; ++k) sim.step();
   // Round-off of 1000 steps of force sums: about 1e-16 per step and node.
   EXPECT_LT((momentum() - p0).norm(), 1e-10 * scale);
@@ -84,8 +83,8 @@ TEST(Simulator, StaticEquilibriumIsTheSameFromBothSchemes) {
   ASSERT_TRUE(b.converged) << b.residual;
   double sag = 0.0, gap = 0.0;
   for (int i = 0; i < verlet.model().node_count(); ++i) {
-    sag = std::max(sag, (verlet.state().x[i] - verlet.model().rest_position[i]).norm());
-    gap = std::max(gap, (verlet.state().x[i] - newton_cotes.state().x[i]).norm());
+    sag = std::max(sag, (verlet.data().x[i] - verlet.model().rest_position[i]).norm());
+    gap = std::max(gap, (verlet.data().x[i] - newton_cotes.data().x[i]).norm());
   }
   EXPECT_GT(sag, 1e-3);  // 27 g on 5 N/m springs: millimetres of sag
   // Residual 1e-11 N over the softest global stiffness (~0.1 N/m, the cube swinging)
@@ -96,7 +95,7 @@ TEST(Simulator, StaticEquilibriumIsTheSameFromBothSchemes) {
   double weight = 0.0;
   for (double mass : m.mass) weight += mass * 9.81;
   double support = 0.0;
-  for (int i : m.components[0].node_sets.at("top")) support += verlet.state().f[i].z();
+  for (int i : m.components[0].node_sets.at("top")) support += verlet.data().f[i].z();
   EXPECT_NEAR(support, -weight, 1e-5 * weight);
 }
 
@@ -104,9 +103,9 @@ TEST(Simulator, FixedNodesStayExactlyFixed) {
   Simulator sim(hanging_cube(Integrator::verlet));
   for (int k = 0; k < 200; ++k) sim.step();
   for (int i : sim.model().components[0].node_sets.at("top")) {
-    EXPECT_EQ(sim.state().x[i].x(), sim.model().rest_position[i].x());
-    EXPECT_EQ(sim.state().x[i].y(), sim.model().rest_position[i].y());
-    EXPECT_EQ(sim.state().x[i].z(), sim.model().rest_position[i].z());
+    EXPECT_EQ(sim.data().x[i].x(), sim.model().rest_position[i].x());
+    EXPECT_EQ(sim.data().x[i].y(), sim.model().rest_position[i].y());
+    EXPECT_EQ(sim.data().x[i].z(), sim.model().rest_position[i].z());
   }
 }
 

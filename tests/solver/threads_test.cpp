@@ -6,8 +6,8 @@
 #include <cstring>
 
 #include "forces/shape_memory.hpp"
-#include "phymul/parallel_plan.hpp"
-#include "phymul/simulator.hpp"
+#include "model/parallel_plan.hpp"
+#include "phymul/simulation.hpp"
 #include "support/models.hpp"
 
 namespace phymul {
@@ -28,13 +28,13 @@ Model sagging_block(FrameMode frame) {
   return model;
 }
 
-State run_with_threads(const Model& model, int threads, int steps) {
+Data run_with_threads(const Model& model, int threads, int steps) {
   const int previous = omp_get_max_threads();
   omp_set_num_threads(threads);
   Simulator sim(model);
   for (int k = 0; k < steps; ++k) sim.step();
   omp_set_num_threads(previous);
-  return sim.state();
+  return sim.data();
 }
 
 bool bitwise_equal(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
@@ -45,9 +45,9 @@ class Threads : public ::testing::TestWithParam<FrameMode> {};
 
 TEST_P(Threads, OneTwoAndThreeThreadsGiveBitIdenticalStates) {
   const Model model = sagging_block(GetParam());
-  const State one = run_with_threads(model, 1, 60);
+  const Data one = run_with_threads(model, 1, 60);
   for (int threads : {2, 3}) {
-    const State many = run_with_threads(model, threads, 60);
+    const Data many = run_with_threads(model, threads, 60);
     EXPECT_TRUE(bitwise_equal(one.x, many.x)) << threads << " threads";
     EXPECT_TRUE(bitwise_equal(one.v, many.v)) << threads << " threads";
     EXPECT_TRUE(bitwise_equal(one.f, many.f)) << threads << " threads";

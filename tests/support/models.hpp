@@ -18,6 +18,11 @@ Vec3 random_vec3(Distribution& dist, std::mt19937& rng) {
   return Vec3(x, y, z);
 }
 
+// Scratch of one force pass over a plan: its energy per block.
+inline std::vector<double> block_scratch(const ParallelPlan& plan) {
+  return std::vector<double>(size_t(plan.blocks()), 0.0);
+}
+
 inline MaterialSpec material(double stiffness, FrameMode frame = FrameMode::polar,
                              bool reaction = true) {
   MaterialSpec m;

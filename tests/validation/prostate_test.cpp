@@ -7,8 +7,8 @@
 #include <cmath>
 #include <random>
 
-#include "forces/forces.hpp"
-#include "phymul/simulator.hpp"
+#include "phymul/forces.hpp"
+#include "phymul/simulation.hpp"
 
 namespace phymul::prostate {
 namespace {
@@ -129,7 +129,7 @@ double rayleigh_frequency(const Simulator& sim) {
   const Model& model = sim.model();
   const std::vector<double>& m = sim.inertia();
   const int n = model.node_count();
-  State rest = sim.state(), moved = rest;
+  Data rest = sim.data(), moved = rest;
   compute_forces(model, rest, rest.time);
   std::vector<Vec3> y(size_t(n), Vec3::Zero());
   std::mt19937 rng(3);
@@ -166,7 +166,7 @@ TEST(ProstateDynamics, TheTimeStepStaysWellInsideTheStabilityLimit) {
     for (double filling : {kEmpty, kFull}) {
       Simulator sim = dynamic_simulator(o, filling, Probe::rigid, 1.0);
       for (double t : {0.0, 0.5, 1.0}) {
-        while (sim.state().time < t) sim.step();
+        while (sim.data().time < t) sim.step();
         const double omega_dt = rayleigh_frequency(sim) * sim.dt();
         EXPECT_LT(omega_dt, 1.82) << filling << " " << o.bladder_subdivisions << " " << t;
         EXPECT_GT(omega_dt, 1.78) << filling << " " << o.bladder_subdivisions << " " << t;
@@ -181,7 +181,7 @@ TEST(ProstateDynamics, BeyondThePowerLimitTheGuardStopsTheRun) {
   Simulator sim = dynamic_simulator(Options{}, kEmpty, Probe::pressure, 1.0);
   sim.set_dt(1.02 * sim.stable_dt());
   try {
-    while (sim.state().step < 300) sim.step();
+    while (sim.data().step < 300) sim.step();
     FAIL() << "300 steps at 1.02 times the power estimate's limit ran through";
   } catch (const InstabilityError& e) {
     const std::string m = e.what();
@@ -191,7 +191,7 @@ TEST(ProstateDynamics, BeyondThePowerLimitTheGuardStopsTheRun) {
   Options at_limit;
   at_limit.dt_safety = 1.0;
   Simulator edge = dynamic_simulator(at_limit, kEmpty, Probe::pressure, 0.4);
-  while (edge.state().time < 0.4) ASSERT_NO_THROW(edge.step()) << edge.state().time;
+  while (edge.data().time < 0.4) ASSERT_NO_THROW(edge.step()) << edge.data().time;
 }
 
 TEST(ProstateDynamics, MassScalingWeighsOnlyTheProstatesCorners) {
@@ -219,12 +219,12 @@ TEST(ProstateDynamics, TheRealTimeSceneReachesTheStaticEquilibrium) {
     for (const auto& [filling, probe] :
          {std::pair{kEmpty, Probe::pressure}, std::pair{kFull, Probe::rigid}}) {
       Simulator sim = dynamic_simulator(o, filling, probe, 1.0);
-      while (sim.state().time < 2.0) sim.step();
+      while (sim.data().time < 2.0) sim.step();
       const bool fine = o.bladder_subdivisions == Options{}.bladder_subdivisions;
       const FillingResult r = fine ? cached(filling, probe) : run_filling(o, filling, probe);
       double worst = 0.0;
       for (int i = 0; i < sim.model().node_count(); ++i)
-        worst = std::max(worst, (sim.state().x[size_t(i)] - r.after[size_t(i)]).norm());
+        worst = std::max(worst, (sim.data().x[size_t(i)] - r.after[size_t(i)]).norm());
       // The dynamic run rests: its residual force is below the static runs' tolerances
       // (measured 7e-9 and 1e-8 N with the pressure probe, 1.5e-6 and 2.2e-6 N with the
       // rigid one, fine and coarse bladder).
@@ -239,7 +239,7 @@ TEST(ProstateDynamics, TheRealTimeSceneReachesTheStaticEquilibrium) {
           << probe_name(probe) << (fine ? " fine" : " coarse");
       // The prostate's centre, whose displacement the study reports.
       Vec3 centre = Vec3::Zero();
-      for (int i : sim.model().components[0].nodes) centre += sim.state().x[size_t(i)];
+      for (int i : sim.model().components[0].nodes) centre += sim.data().x[size_t(i)];
       Vec3 static_centre = Vec3::Zero();
       for (int i : sim.model().components[0].nodes) static_centre += r.after[size_t(i)];
       const double n = double(sim.model().components[0].nodes.size());

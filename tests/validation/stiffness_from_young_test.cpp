@@ -12,7 +12,7 @@
 #include "phymul/fem.hpp"
 #include "phymul/model.hpp"
 #include "phymul/scene.hpp"
-#include "phymul/simulator.hpp"
+#include "phymul/simulation.hpp"
 #include "solver/newton_run.hpp"
 #include "support/process.hpp"
 
@@ -156,7 +156,7 @@ double fem_force(const std::string& law, double push_mm) {
                  false, "{mode: static, solver: newton, load_steps: 4}", push_mm),
       "fem.yaml");
   const Model model = compile_scene(scene);
-  const fem::Result r = fem::solve_static(newton_problem(scene, model));
+  const fem::Result r = fem::solve_static(newton_problem(model));
   EXPECT_TRUE(r.converged) << r.message;
   return top_force(r.reaction, model.components[0].node_sets.at("top"));
 }

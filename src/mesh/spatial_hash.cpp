@@ -1,4 +1,4 @@
-#include "constraints/spatial_hash.hpp"
+#include "mesh/spatial_hash.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -27,7 +27,7 @@ uint32_t TriangleHash::bucket(const Cell& c) const {
   return uint32_t(h ^ (h >> 32)) & mask_;
 }
 
-bool TriangleHash::visited_stamp(uint32_t b) const {
+bool TriangleHash::visited_stamp(uint32_t b) {
   if (seen_[b] == stamp_) return true;
   seen_[b] = stamp_;
   return false;

@@ -1,4 +1,4 @@
-#include "phymul/parallel_plan.hpp"
+#include "model/parallel_plan.hpp"
 
 #include <algorithm>
 #include <cstdint>
@@ -52,7 +52,6 @@ ParallelPlan plan_blocks(int items,
       if (colour[b] == c) plan.colour_blocks.push_back(b);
     plan.colour_start[c + 1] = int(plan.colour_blocks.size());
   }
-  plan.block_energy.assign(size_t(blocks), 0.0);
   return plan;
 }
 

@@ -24,7 +24,7 @@ class TriangleHash {
   // Calls visit(triangle index) for the triangles filed in the 27 cells around p (and any
   // sharing their buckets: callers test distances anyway).
   template <class Visit>
-  void around(const Vec3& p, Visit visit) const {
+  void around(const Vec3& p, Visit visit) {
     const Cell c = cell_of(p);
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
@@ -42,15 +42,15 @@ class TriangleHash {
   using Cell = std::array<int64_t, 3>;
   Cell cell_of(const Vec3& p) const;
   uint32_t bucket(const Cell& c) const;
-  bool visited_stamp(uint32_t b) const;
+  bool visited_stamp(uint32_t b);
 
   double cell_ = 1.0;
   uint32_t mask_ = 0;
-  std::vector<int> start_;              // bucket b holds entries_[start_[b] .. start_[b+1])
-  std::vector<int> entries_;            // triangle indices, grouped by bucket
-  std::vector<uint32_t> slot_;          // per triangle: its bucket
-  mutable std::vector<uint64_t> seen_;  // per bucket: stamp of the last query that visited it
-  mutable uint64_t stamp_ = 1;
+  std::vector<int> start_;      // bucket b holds entries_[start_[b] .. start_[b+1])
+  std::vector<int> entries_;    // triangle indices, grouped by bucket
+  std::vector<uint32_t> slot_;  // per triangle: its bucket
+  std::vector<uint64_t> seen_;  // per bucket: stamp of the last query that visited it
+  uint64_t stamp_ = 1;
 };
 
 }  // namespace phymul

@@ -1,0 +1,107 @@
+// Data: everything a run changes (MuJoCo's mjData beside mjModel). A step reads a const
+// Model and one Data and writes that Data only, so one compiled Model drives any number of
+// Data at once (threads, sweeps). A checkpoint is a Data, saved and restored whole.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <memory>
+#include <vector>
+
+#include "phymul/model.hpp"
+
+namespace phymul {
+
+// Pose and momenta of a rigid body.
+struct RigidBodyState {
+  Vec3 center = Vec3::Zero();                  // m, centre of mass
+  Eigen::Quaterniond orientation{1, 0, 0, 0};  // principal frame -> world
+  Vec3 momentum = Vec3::Zero();                // kg m/s
+  Vec3 angular_momentum = Vec3::Zero();        // kg m^2/s, about the centre, world frame
+};
+
+// A node put back on the other side's surface of a contact pair by a step's contact stage:
+// what the velocity stage and a static residual read.
+struct PairContact {
+  int pair = 0, side = 0;  // the node belongs to component pair.components[side]
+  int node = 0;
+  Triangle triangle{};          // of the other side, global ids
+  Vec3 weights = Vec3::Zero();  // barycentric weights of the contact point
+  Vec3 normal = Vec3::UnitZ();  // unit, out of the other side
+  double impulse = 0.0;         // N s along normal on the node (minus it on the triangle)
+};
+
+// Where a static solve stands between two relaxation iterations: with the rest of Data, all
+// that its next iteration reads.
+struct StaticProgress {
+  int load_step = 0;              // the load step under way, 1-based; 0 before the first
+  long iterations = 0;            // in the load steps before it
+  long step_iterations = 0;       // in the load step under way
+  double previous_kinetic = 0.0;  // J, the kinetic damping's last peak candidate
+  double fire_alpha = 0.1;        // FIRE: share of the force direction mixed into velocities
+  long fire_downhill = 0;         // FIRE: steps since its last restart
+};
+
+// Buffers a step works in and caches keyed on the positions they were computed at: sized
+// from the model when the Data is made, so that a step allocates nothing, and never read
+// across steps but through their keys (a fresh one gives the same results). Internal.
+struct Workspace;
+
+namespace detail {
+// Owns a T on the heap and copies it deeply: keeps an internal type out of the public
+// headers while the Data that holds it copies as a value.
+template <class T>
+class Owned {
+ public:
+  Owned();
+  ~Owned();
+  Owned(const Owned& other);
+  Owned(Owned&& other) noexcept;
+  Owned& operator=(const Owned& other);
+  Owned& operator=(Owned&& other) noexcept;
+  T& operator*() const { return *p_; }
+  T* operator->() const { return p_.get(); }
+
+ private:
+  std::unique_ptr<T> p_;
+};
+}  // namespace detail
+
+struct Data {
+  double time = 0.0;       // s
+  long step = 0;           // steps taken (dynamics) or relaxation iterations (statics)
+  std::vector<Vec3> x, v;  // m, m/s, per node
+  std::vector<Vec3> f;     // N, every force but damping, at (x, load_time)
+  std::vector<Eigen::Quaterniond> rotation;  // per shape-memory node: last best-fit rotation
+  // J: elastic energy at the last force pass (shape memory and explicit finite elements).
+  double shape_memory_energy = 0.0;
+
+  std::vector<RigidBodyState> bodies;  // per Model::rigid_bodies
+  // N, per rigid obstacle: the force it exerted on the body over the last step (its impulse
+  // over dt; zero before the first step).
+  std::vector<Vec3> contact_force;
+  // N, per contact pair: the force the second component exerted on the first over the last
+  // step.
+  std::vector<Vec3> pair_contact_force;
+  // Per node: the obstacle whose contact stage last moved it in the last step, or -1 (empty
+  // without obstacles): a node the volume projection then moved off by a hair still touches.
+  std::vector<int> obstacle_touching;
+  // The contact pairs' contacts of the last step, at most pair_contact_capacity(model) (so
+  // much is reserved: a step allocates nothing).
+  std::vector<PairContact> pair_contacts;
+
+  double dt = 0.0;         // s, the explicit step
+  double stable_dt = 0.0;  // s, the stability estimate `dt: auto` takes its share of
+  double load_time = 0.0;  // s, the load time at which f was evaluated
+  StaticProgress static_progress;
+
+  detail::Owned<Workspace> work;  // not saved: see Workspace
+};
+
+// The most contacts one step's contact-pair stage records.
+size_t pair_contact_capacity(const Model& model);
+
+// A Data for the model with every array sized and the nodes at rest, time 0, forces zero,
+// dt 0 (make_data, simulation.hpp, also poses, constrains, evaluates and picks dt).
+Data allocate_data(const Model& model);
+
+}  // namespace phymul
