@@ -60,7 +60,7 @@ FUZZ_FLAGS := -std=c++20 -O1 -g -fno-omit-frame-pointer -Iinclude -Isrc -I/usr/i
 FUZZ_SANITIZE := -fsanitize=address,undefined
 FUZZ_LIBS := -lyaml-cpp -lfmt
 FUZZ_LIB_SRCS := $(wildcard src/io/scene.cpp src/io/scene_reader*.cpp src/io/units.cpp \
-	src/io/parameter_table.cpp src/mesh/*.cpp src/validation/truthcube.cpp src/io/mesh_file*.cpp \
+	src/io/parameter_table.cpp src/mesh/*.cpp src/studies/truthcube.cpp src/io/mesh_file*.cpp \
 	src/io/checkpoint.cpp src/io/vtk.cpp src/io/vtk_appended.cpp)
 FUZZ_LIB_OBJS := $(patsubst src/%.cpp,$(FUZZ_DIR)/obj/%.o,$(FUZZ_LIB_SRCS))
 

@@ -10,8 +10,9 @@
 #include <string>
 
 #include "io/results.hpp"
-#include "phymul/prostate.hpp"
+#include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
+#include "phymul/studies/prostate.hpp"
 
 namespace {
 

@@ -8,8 +8,9 @@
 
 #include <chrono>
 
-#include "phymul/prostate.hpp"
+#include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
+#include "phymul/studies/prostate.hpp"
 #include "thread_cpu_time.hpp"
 
 namespace {

@@ -4,8 +4,9 @@
 #include <omp.h>
 
 #include "cube.hpp"
-#include "phymul/prostate.hpp"
 #include "phymul/scene.hpp"
+#include "phymul/scene_io.hpp"
+#include "phymul/studies/prostate.hpp"
 
 namespace {
 

@@ -3,7 +3,7 @@
 #include <benchmark/benchmark.h>
 
 #include "phymul/calibration.hpp"
-#include "phymul/truthcube.hpp"
+#include "phymul/studies/truthcube.hpp"
 
 namespace {
 

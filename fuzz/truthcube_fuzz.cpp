@@ -11,7 +11,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "phymul/truthcube.hpp"
+#include "phymul/studies/truthcube.hpp"
 
 namespace {
 

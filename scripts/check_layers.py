@@ -3,7 +3,9 @@
 
 Layers, lowest first: mesh < fem < model < forces, constraints < solver < io < studies <
 apps, python. A source file may include its own layer and those below. Files under src/<layer>/
-belong to that layer, a public header include/phymul/<name>.hpp to the layer PUBLIC names.
+belong to that layer, a public header include/phymul/<name>.hpp to the layer PUBLIC names,
+include/phymul/studies/ to the studies.
+Usage: check_layers.py [ROOT] (ROOT: the source tree, by default this script's).
 Prints every offending include as file:line and exits 1; exits 0 when there is none.
 """
 import pathlib
@@ -32,9 +34,6 @@ PUBLIC = {
     "run.hpp": "io",
     "scene_io.hpp": "io",
     "checkpoint.hpp": "io",
-    "truthcube.hpp": "studies",
-    "prostate.hpp": "studies",
-    "calibration_study.hpp": "studies",
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"')
 
@@ -44,7 +43,7 @@ def layer_of(root, path):
     if rel[0] == "src" and len(rel) > 2:
         return rel[1]
     if rel[0] == "include" and rel[1] == "phymul":
-        return PUBLIC.get(rel[2])
+        return "studies" if rel[2] == "studies" else PUBLIC.get(rel[2])
     if rel[0] == "apps":
         return "apps"
     if rel[0] == "python":
@@ -62,7 +61,9 @@ def target_layer(root, including, name):
 
 
 def main():
-    root = pathlib.Path(__file__).resolve().parent.parent
+    root = pathlib.Path(sys.argv[1] if len(sys.argv) > 1 else __file__).resolve()
+    if len(sys.argv) <= 1:
+        root = root.parent.parent
     problems, unknown = [], []
     files = [p for d in ("src", "include", "apps", "python") if (root / d).is_dir()
              for p in (root / d).rglob("*") if p.suffix in (".cpp", ".hpp", ".h")]

@@ -11,6 +11,7 @@
 #include "phymul/model.hpp"
 #include "phymul/run.hpp"
 #include "phymul/scene.hpp"
+#include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
 #include "prostate_command.hpp"
 #include "truthcube_command.hpp"

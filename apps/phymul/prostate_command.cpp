@@ -11,9 +11,10 @@
 #include <iostream>
 #include <memory>
 
-#include "phymul/prostate.hpp"
 #include "phymul/run.hpp"
+#include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
+#include "phymul/studies/prostate.hpp"
 #include "phymul/vtk.hpp"
 #include "pictures.hpp"
 

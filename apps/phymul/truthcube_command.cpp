@@ -7,7 +7,7 @@
 #include <iostream>
 #include <memory>
 
-#include "phymul/truthcube.hpp"
+#include "phymul/studies/truthcube.hpp"
 #include "phymul/vtk.hpp"
 #include "pictures.hpp"
 

@@ -231,25 +231,6 @@ struct FibreBundle {
   Schedule activation;              // a(t) in [0, 1], in x
 };
 
-// A shape-memory component's K from a Young's modulus (scene `young`): calibrated on the
-// component's own mesh against the reference FEM, by calibration::calibrate_object.
-struct StiffnessCalibration {
-  std::string component;
-  double young = 0.0, poisson = 0.0;  // Pa, -: the FEM's material
-  int axis = 2;                       // compression axis: 0 x, 1 y, 2 z
-  double strain = 0.0;                // nominal compression of the extent along the axis
-  double push = 0.0;                  // m
-  int held = 0, pushed = 0;           // nodes clamped at either end
-  double h = 0.0;                     // m, mean rest edge length
-  double fem_force = 0.0;             // N, along the axis on the pushed nodes
-  double stiffness = 0.0;             // N/m: the K whose force is fem_force
-  double alpha = 0.0;                 // stiffness / (young h), beside `phymul calibrate`
-  double displacement_rms = 0.0;      // rms over nodes of |u_lsm - u_fem|, over push
-  double displacement_max = 0.0;      // largest |u_lsm - u_fem|, over push
-  long lsm_iterations = 0;
-  int fem_newton_iterations = 0;
-};
-
 struct Model {
   std::vector<Vec3> rest_position;  // m
   std::vector<double> mass;         // kg
@@ -349,6 +330,10 @@ bool finalized(const Model& model);
 // Per node, the Gershgorin row sum (N/m) of the elastic stiffness at rest (shape memory,
 // fibres, explicit finite elements): the stability estimate's and mass scaling's measure.
 std::vector<double> stiffness_row_sums(const Model& model);
+
+// The mesh a scene's MeshSpec describes: generated, or its file as the loader read it
+// (std::invalid_argument when it was not read).
+Mesh make_mesh(const MeshSpec& spec);
 
 // A scene file's description into a model; semantic problems (a node set that selects no
 // node, a volume constraint on an open surface, ...) throw SceneError with their location.

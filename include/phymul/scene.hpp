@@ -1,9 +1,11 @@
-// Scene files: the YAML a user writes, parsed and checked against the parameter table
-// into a plain description. Turning it into a Model is compile_scene (model.hpp).
+// Scenes: the plain description of what to simulate, as a scene file says it (YAML, read by
+// scene_io.hpp's load_scene) or as a program builds it. Turning it into a Model is
+// compile_scene (model.hpp).
 #pragma once
 
 #include <array>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -12,7 +14,6 @@
 #include "phymul/fem.hpp"
 #include "phymul/mesh.hpp"
 #include "phymul/schedule.hpp"
-#include "phymul/vtk.hpp"
 
 namespace phymul {
 
@@ -87,6 +88,9 @@ struct MeshSpec {
   Eigen::Vector3d center = Eigen::Vector3d::Zero();  // m
   std::string file;                                  // instead of a generator
   std::string units = "m";                           // of the file's coordinates
+  // The mesh of `file` in metres, as the loader read it (scene_io.hpp): compiling reads no
+  // file.
+  std::shared_ptr<const Mesh> file_mesh;
   SourceLoc loc;
 };
 
@@ -144,6 +148,25 @@ struct FibreSpec {  // contractile fibres of an active object
   SourceLoc loc;
 };
 
+// A shape-memory object's K from a Young's modulus (scene `young`): calibrated on the object's
+// own mesh against the reference FEM, by calibration::calibrate_object (calibration.hpp).
+struct StiffnessCalibration {
+  std::string component;
+  double young = 0.0, poisson = 0.0;  // Pa, -: the FEM's material
+  int axis = 2;                       // compression axis: 0 x, 1 y, 2 z
+  double strain = 0.0;                // nominal compression of the extent along the axis
+  double push = 0.0;                  // m
+  int held = 0, pushed = 0;           // nodes clamped at either end
+  double h = 0.0;                     // m, mean rest edge length
+  double fem_force = 0.0;             // N, along the axis on the pushed nodes
+  double stiffness = 0.0;             // N/m: the K whose force is fem_force
+  double alpha = 0.0;                 // stiffness / (young h), beside `phymul calibrate`
+  double displacement_rms = 0.0;      // rms over nodes of |u_lsm - u_fem|, over push
+  double displacement_max = 0.0;      // largest |u_lsm - u_fem|, over push
+  long lsm_iterations = 0;
+  int fem_newton_iterations = 0;
+};
+
 struct ObjectSpec {
   std::string name;
   ObjectType type = ObjectType::elastic;
@@ -154,6 +177,9 @@ struct ObjectSpec {
 
   std::optional<MotionSpec> motion;  // rigid: driven when given
   FibreSpec fibres;                  // active
+  // Shape memory given `young`: the calibration that set material.stiffness (the loader's
+  // calibrate_stiffness, calibration.hpp); compile_scene refuses `young` without it.
+  std::optional<StiffnessCalibration> calibration;
   SourceLoc loc;
 };
 
@@ -216,6 +242,12 @@ struct ContactSpec {
   SourceLoc loc;
 };
 
+// How a .vtu holds its numbers. `ascii`: text, each double in its shortest form that parses
+// back to the same bits (readable, diffable, well-formed XML). `binary`: VTK XML appended
+// raw data (UInt64 byte counts, little-endian), the same bits at a fraction of the time and
+// size; ParaView, VTK and meshio read it, plain XML parsers do not (raw bytes are not XML).
+enum class VtuEncoding { ascii, binary };
+
 struct OutputSpec {
   double interval = 0.0;  // s between frames (dynamic); 0 = first and last frame only
   bool vtk = true;
@@ -235,14 +267,5 @@ struct Scene {
   std::vector<ContactSpec> contacts;
   OutputSpec output;
 };
-
-// Parses and checks a scene file against the parameter table; throws SceneError listing
-// every problem (unreadable file, YAML syntax, unknown key with did-you-mean, wrong type,
-// value out of range, missing required field).
-Scene load_scene(const std::filesystem::path& file);
-Scene parse_scene(const std::string& text, const std::string& file_name);
-
-// The scene reference (Markdown), generated from the parameter table.
-std::string scene_reference_markdown();
 
 }  // namespace phymul

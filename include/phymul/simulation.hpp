@@ -99,6 +99,13 @@ FrequencyEstimate highest_frequency(const Model& model, const Data& data,
                                     const std::vector<double>& inertia, double load_time = 0.0,
                                     int max_iterations = 400);
 
+// The compiled model as one reference-FEM problem at its settings' end time: its fem cells
+// (hexahedra, tetrahedra; wedges already cut) with each object's law, E and nu; the fixed and
+// prescribed components at duration (scaled by fem's load steps); dead nodal loads: the
+// applied forces at duration plus gravity on the lumped node masses (what the relaxation
+// applies). Stitched objects share their merged nodes.
+fem::Problem newton_problem(const Model& model);
+
 // A Model and a Data together, for programs that run one simulation: the functions above as
 // methods. Finalizes the model first where its settings changed since.
 class Simulator {

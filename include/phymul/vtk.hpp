@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "phymul/mesh.hpp"
+#include "phymul/scene.hpp"
 
 namespace phymul {
 
@@ -29,11 +30,7 @@ struct CellField {
   std::span<const int> values;  // size = cells
 };
 
-// How a .vtu holds its numbers. `ascii`: text, each double in its shortest form that parses
-// back to the same bits (readable, diffable, well-formed XML). `binary`: VTK XML appended
-// raw data (UInt64 byte counts, little-endian), the same bits at a fraction of the time and
-// size; ParaView, VTK and meshio read it, plain XML parsers do not (raw bytes are not XML).
-enum class VtuEncoding { ascii, binary };
+// (VtuEncoding, how a .vtu holds its numbers, is a scene setting: scene.hpp.)
 
 // One VTK XML UnstructuredGrid file (full double precision), written atomically.
 void write_vtu(const std::filesystem::path& path, std::span<const Vec3> points,

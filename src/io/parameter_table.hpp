@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "io/units.hpp"
+#include "model/closest_match.hpp"
 
 namespace phymul::io {
 
@@ -79,11 +80,5 @@ const Parameter* find_parameter(std::string_view section, std::string_view name)
 std::vector<const Parameter*> section_parameters(std::string_view section);
 
 std::string_view kind_name(Kind kind);
-
-// Damerau-Levenshtein (optimal string alignment) distance, for did-you-mean suggestions.
-int edit_distance(std::string_view a, std::string_view b);
-// The candidate closest to `word` when it is close enough to be a likely typo.
-std::optional<std::string_view> closest_match(std::string_view word,
-                                              std::span<const std::string_view> candidates);
 
 }  // namespace phymul::io

@@ -1,6 +1,4 @@
 // Scene files: YAML text -> Scene, checked field by field against the parameter table.
-#include "phymul/scene.hpp"
-
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <yaml-cpp/depthguard.h>
@@ -19,6 +17,7 @@
 #include "io/parameter_table.hpp"
 #include "io/scene_interactions.hpp"
 #include "io/scene_reader.hpp"
+#include "phymul/scene_io.hpp"
 
 namespace phymul {
 
@@ -543,7 +542,7 @@ void SceneBuilder::check_references() {
   for (const auto& reference : references_) {
     if (std::find(known.begin(), known.end(), reference.name) != known.end()) continue;
     std::string hint;
-    if (const auto suggestion = io::closest_match(reference.name, known))
+    if (const auto suggestion = closest_match(reference.name, known))
       hint = fmt::format("did you mean '{}'? ", *suggestion);
     const std::string list = !known.empty()
                                  ? fmt::format("known objects: {}", fmt::join(known, ", "))
@@ -585,7 +584,7 @@ std::string Diagnostic::str() const {
 SceneError::SceneError(std::vector<Diagnostic> diagnostics)
     : std::runtime_error(join_lines(diagnostics)), diagnostics_(std::move(diagnostics)) {}
 
-Scene parse_scene(const std::string& text, const std::string& file_name) {
+Scene read_scene_text(const std::string& text, const std::string& file_name) {
   SceneContext context(file_name);
   Scene scene;
   scene.file = file_name;
@@ -597,6 +596,12 @@ Scene parse_scene(const std::string& text, const std::string& file_name) {
     context.error(context.loc(e.mark), fmt::format("cannot read the scene: {}", e.msg));
   }
   if (!context.ok()) throw SceneError(context.sorted_diagnostics());
+  return scene;
+}
+
+Scene parse_scene(const std::string& text, const std::string& file_name) {
+  Scene scene = read_scene_text(text, file_name);
+  prepare_scene(scene);
   return scene;
 }
 

@@ -20,6 +20,7 @@
 
 #include "io/parameter_table.hpp"
 #include "phymul/scene.hpp"
+#include "phymul/scene_io.hpp"
 
 namespace phymul::io {
 
@@ -163,3 +164,11 @@ class SectionReader {
 };
 
 }  // namespace phymul::io
+
+namespace phymul {
+
+// Scene text parsed and checked against the schema, and no more: no mesh file read, no
+// calibration (parse_scene does both after it; the fuzzer stops here).
+Scene read_scene_text(const std::string& text, const std::string& file_name);
+
+}  // namespace phymul

@@ -7,6 +7,7 @@
 #include "io/parameter_table.hpp"
 #include "io/units.hpp"
 #include "phymul/scene.hpp"
+#include "phymul/scene_io.hpp"
 
 namespace phymul {
 

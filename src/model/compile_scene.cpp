@@ -6,13 +6,10 @@
 #include <limits>
 #include <optional>
 
-#include "io/mesh_file.hpp"
-#include "io/parameter_table.hpp"
-#include "io/units.hpp"
+#include "model/closest_match.hpp"
+#include "model/compile_checks.hpp"
 #include "model/compile_interactions.hpp"
-#include "phymul/calibration.hpp"
 #include "phymul/model.hpp"
-#include "solver/newton_run.hpp"
 
 namespace phymul {
 namespace {
@@ -26,51 +23,57 @@ struct Compiler {
     problems.push_back({loc, std::move(message)});
   }
 
-  Mesh generate(const MeshSpec& m) {
-    if (m.generator == "box") return make_box(m.size, m.cells, m.element, m.center);
-    if (m.generator == "ellipsoid")
-      return m.surface         ? make_ellipsoid_surface(m.radii, m.subdivisions, m.center)
-             : m.hexahedra > 0 ? make_ellipsoid_hexa(m.radii, m.hexahedra, m.center)
-                               : make_ellipsoid_volume(m.radii, m.subdivisions, m.layers, m.center);
-    if (m.generator == "cylinder")
-      return m.surface
-                 ? make_cylinder_surface(m.radius, m.length, m.around, m.along, m.center)
-                 : make_cylinder_volume(m.radius, m.length, m.around, m.along, m.rings, m.center);
-    throw std::invalid_argument(fmt::format("unknown mesh generator '{}'", m.generator));
-  }
-
-  // A mesh file's path is relative to the scene file; its problems are reported where they
-  // are in it, naming the object whose mesh it is.
-  std::optional<Mesh> read_file(const ObjectSpec& o) {
-    const std::filesystem::path path = scene.file.parent_path() / o.mesh.file;
-    const io::Unit* unit = io::find_unit(o.mesh.units);
-    try {
-      return read_mesh_file(path, unit ? unit->divisor / unit->scale : 1.0);
-    } catch (const MeshFileError& e) {
-      fail({e.file, e.line, e.column}, fmt::format("{} (the mesh of object '{}', {}:{})", e.message,
-                                                   o.name, o.loc.file, o.loc.line));
+  // The object's mesh: generated, or its file as the loader read it.
+  std::optional<Mesh> mesh_of(const ObjectSpec& o) {
+    if (o.mesh.file.empty()) {
+      try {
+        return make_mesh(o.mesh);
+      } catch (const std::exception& e) {
+        fail(o.loc, fmt::format("object '{}': {}", o.name, e.what()));
+        return std::nullopt;
+      }
+    }
+    if (!o.mesh.file_mesh) {
+      fail(o.mesh.loc, fmt::format("object '{}': the mesh file {} was not read (load_scene reads "
+                                   "it; for a scene built in a program, call prepare_scene)",
+                                   o.name, o.mesh.file));
       return std::nullopt;
     }
+    return *o.mesh.file_mesh;
+  }
+
+  // A shape-memory material given `young`: the K its calibration found (prepare_scene).
+  bool calibrated(const ObjectSpec& o, MaterialSpec& material) {
+    const std::optional<StiffnessCalibration>& c = o.calibration;
+    if (c && c->young == material.young && c->poisson == material.poisson &&
+        c->axis == material.calibration_axis) {
+      material.stiffness = c->stiffness;
+      model.stiffness_calibrations.push_back(*c);
+      return true;
+    }
+    fail(material.young_loc.line > 0 ? material.young_loc : o.loc,
+         fmt::format("object '{}': a shape-memory stiffness from 'young' is calibrated before "
+                     "compiling (load_scene does it; after editing a scene in a program, call "
+                     "prepare_scene)",
+                     o.name));
+    return false;
   }
 
   void add_object(const ObjectSpec& o) {
-    std::optional<Mesh> from_file;
-    if (!o.mesh.file.empty() && !(from_file = read_file(o))) return;
+    std::optional<Mesh> mesh = mesh_of(o);
+    if (!mesh) return;
     try {
-      const Mesh mesh = from_file ? std::move(*from_file) : generate(o.mesh);
       if (o.type == ObjectType::rigid) {
         const MotionSpec motion = o.motion.value_or(MotionSpec{});
-        add_rigid_component(model, o.name, mesh, o.material, o.motion.has_value(),
+        add_rigid_component(model, o.name, *mesh, o.material, o.motion.has_value(),
                             motion.translation, motion.rotation);
         return;
       }
       MaterialSpec material = o.material;
-      if (material.model == ElasticModel::shape_memory && material.young > 0.0) {
-        model.stiffness_calibrations.push_back(calibration::calibrate_object(
-            o.name, mesh, material, o.volume_constraint, material.calibration_axis));
-        material.stiffness = model.stiffness_calibrations.back().stiffness;
-      }
-      const int c = add_elastic_component(model, o.name, mesh, material);
+      if (material.model == ElasticModel::shape_memory && material.young > 0.0 &&
+          !calibrated(o, material))
+        return;
+      const int c = add_elastic_component(model, o.name, *mesh, material);
       if (o.type == ObjectType::active) model.components[c].kind = ComponentKind::active;
       if (o.volume_constraint) {
         add_volume_constraint(model, c);
@@ -119,7 +122,7 @@ struct Compiler {
           known += (known.empty() ? "" : ", ") + name;
           names.push_back(name);
         }
-        const auto close = io::closest_match(s.name, names);
+        const auto close = closest_match(s.name, names);
         fail(s.loc, fmt::format("object '{}' has no node set '{}' ({}its node sets: {})", object,
                                 s.name, close ? fmt::format("did you mean '{}'? ", *close) : "",
                                 known.empty() ? "none" : known));

@@ -4,7 +4,8 @@
 
 #include <filesystem>
 
-#include "phymul/prostate.hpp"
+#include "phymul/scene_io.hpp"
+#include "phymul/studies/prostate.hpp"
 #include "support/process.hpp"
 
 namespace phymul {

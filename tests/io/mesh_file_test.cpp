@@ -10,6 +10,7 @@
 
 #include "phymul/model.hpp"
 #include "phymul/scene.hpp"
+#include "phymul/scene_io.hpp"
 #include "support/process.hpp"
 
 namespace phymul {

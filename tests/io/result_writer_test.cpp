@@ -12,6 +12,7 @@
 
 #include "io/results.hpp"
 #include "phymul/scene.hpp"
+#include "phymul/scene_io.hpp"
 #include "support/process.hpp"
 
 namespace phymul {

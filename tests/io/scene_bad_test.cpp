@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "phymul/scene.hpp"
+#include "phymul/scene_io.hpp"
 
 namespace phymul {
 namespace {

@@ -4,6 +4,7 @@
 
 #include "phymul/model.hpp"
 #include "phymul/scene.hpp"
+#include "phymul/scene_io.hpp"
 
 namespace phymul {
 namespace {

@@ -6,6 +6,7 @@
 
 #include "phymul/model.hpp"
 #include "phymul/scene.hpp"
+#include "phymul/scene_io.hpp"
 #include "support/process.hpp"
 
 namespace phymul {

@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "io/parameter_table.hpp"
+#include "phymul/scene_io.hpp"
 
 namespace phymul {
 namespace {

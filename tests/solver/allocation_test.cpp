@@ -10,6 +10,7 @@
 #include <new>
 #include <utility>
 
+#include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
 #include "support/models.hpp"
 

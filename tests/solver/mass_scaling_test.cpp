@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "phymul/scene.hpp"
+#include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
 
 namespace phymul {

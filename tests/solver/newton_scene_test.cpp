@@ -8,12 +8,13 @@
 #include <map>
 #include <string>
 
+#include "io/run_newton.hpp"
 #include "phymul/fem.hpp"
 #include "phymul/model.hpp"
 #include "phymul/run.hpp"
 #include "phymul/scene.hpp"
+#include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
-#include "solver/newton_run.hpp"
 #include "support/process.hpp"
 #include "support/results.hpp"
 

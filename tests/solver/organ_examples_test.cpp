@@ -4,6 +4,7 @@
 
 #include <filesystem>
 
+#include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
 #include "solver/rigid.hpp"
 

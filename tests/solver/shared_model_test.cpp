@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "phymul/scene.hpp"
+#include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
 #include "support/models.hpp"
 #include "support/process.hpp"
@@ -28,8 +29,8 @@ Data run(const Model& model, unsigned k, int steps) {
   std::normal_distribution<double> speed(0.0, 1e-3);  // m/s
   for (int i = 0; i < model.node_count(); ++i)
     if (model.inverse_mass[i] != Vec3::Zero())
-      data.v[i] = testing::random_vec3(speed, rng).cwiseProduct(
-          (model.inverse_mass[i].array() > 0.0).cast<double>().matrix());
+      data.v[i] = testing::random_vec3(speed, rng)
+                      .cwiseProduct((model.inverse_mass[i].array() > 0.0).cast<double>().matrix());
   for (int s = 0; s < steps; ++s) step(model, data);
   return data;
 }

@@ -2,7 +2,7 @@
 
 #include <sstream>
 
-#include "phymul/truthcube.hpp"
+#include "phymul/studies/truthcube.hpp"
 #include "phymul/vtk.hpp"
 
 namespace phymul::truthcube {

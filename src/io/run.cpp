@@ -11,9 +11,9 @@
 #include <optional>
 #include <stdexcept>
 
+#include "io/run_checkpoint.hpp"
+#include "io/run_newton.hpp"
 #include "io/units.hpp"
-#include "solver/newton_run.hpp"
-#include "solver/run_checkpoint.hpp"
 
 namespace phymul {
 namespace {

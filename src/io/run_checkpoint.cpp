@@ -1,4 +1,4 @@
-#include "solver/run_checkpoint.hpp"
+#include "io/run_checkpoint.hpp"
 
 #include <fmt/format.h>
 

@@ -1,4 +1,4 @@
-#include "validation/truthcube_models.hpp"
+#include "studies/truthcube_models.hpp"
 
 #include <cmath>
 #include <stdexcept>

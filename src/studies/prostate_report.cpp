@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "phymul/prostate.hpp"
+#include "phymul/studies/prostate.hpp"
 #include "phymul/vtk.hpp"
 
 namespace phymul::prostate {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "phymul/prostate.hpp"
+#include "phymul/studies/prostate.hpp"
 
 namespace phymul::prostate {
 namespace {

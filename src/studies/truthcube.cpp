@@ -1,4 +1,4 @@
-#include "phymul/truthcube.hpp"
+#include "phymul/studies/truthcube.hpp"
 
 #include <fmt/format.h>
 

@@ -1,7 +1,7 @@
 // Pieces shared by the Truth Cube study's two models.
 #pragma once
 
-#include "phymul/truthcube.hpp"
+#include "phymul/studies/truthcube.hpp"
 
 namespace phymul::truthcube {
 

@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "phymul/fem.hpp"
-#include "validation/truthcube_models.hpp"
+#include "studies/truthcube_models.hpp"
 
 namespace phymul::truthcube {
 

@@ -5,8 +5,8 @@
 
 #include "phymul/calibration.hpp"
 #include "phymul/simulation.hpp"
-#include "phymul/truthcube.hpp"
-#include "validation/truthcube_models.hpp"
+#include "phymul/studies/truthcube.hpp"
+#include "studies/truthcube_models.hpp"
 
 namespace phymul::truthcube {
 namespace {

@@ -1,5 +1,5 @@
 // The prostate study (issue: prostate, bladder and endorectal probe): what its numbers rest on.
-#include "phymul/prostate.hpp"
+#include "phymul/studies/prostate.hpp"
 
 #include <gtest/gtest.h>
 
@@ -8,6 +8,7 @@
 #include <random>
 
 #include "phymul/forces.hpp"
+#include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
 
 namespace phymul::prostate {

@@ -8,8 +8,9 @@
 #include <stdexcept>
 
 #include "io/obstacle_surface.hpp"
-#include "phymul/prostate.hpp"
+#include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
+#include "phymul/studies/prostate.hpp"
 #include "phymul/vtk.hpp"
 
 namespace phymul::prostate {
