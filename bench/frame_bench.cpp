@@ -9,7 +9,7 @@
 #include <memory>
 #include <string>
 
-#include "io/results.hpp"
+#include "phymul/results.hpp"
 #include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
 #include "phymul/studies/prostate.hpp"

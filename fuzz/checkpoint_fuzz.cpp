@@ -9,7 +9,7 @@
 #include <cstring>
 #include <string>
 
-#include "io/checkpoint.hpp"
+#include "phymul/checkpoint.hpp"
 
 namespace {
 

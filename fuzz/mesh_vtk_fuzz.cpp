@@ -7,7 +7,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "io/mesh_file.hpp"
+#include "phymul/mesh_io.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);

@@ -17,7 +17,7 @@ RANK = {"mesh": 0, "fem": 1, "model": 2, "forces": 3, "constraints": 3, "solver"
         "studies": 6, "apps": 7, "python": 7}
 # The layer of each public header (include/phymul/<name>.hpp).
 PUBLIC = {
-    "phymul.hpp": "apps",  # the umbrella header: everything below it
+    "phymul.hpp": "io",  # the umbrella header: the library, studies aside
     "mesh.hpp": "mesh",
     "schedule.hpp": "mesh",
     "fem.hpp": "fem",
@@ -26,7 +26,6 @@ PUBLIC = {
     "data.hpp": "model",
     "forces.hpp": "forces",
     "simulation.hpp": "solver",
-    "simulator.hpp": "solver",
     "calibration.hpp": "solver",
     "mesh_io.hpp": "io",
     "vtk.hpp": "io",
@@ -34,6 +33,7 @@ PUBLIC = {
     "run.hpp": "io",
     "scene_io.hpp": "io",
     "checkpoint.hpp": "io",
+    "installation.hpp": "io",
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"')
 

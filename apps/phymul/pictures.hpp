@@ -7,12 +7,20 @@
 #include <iostream>
 #include <string>
 
+#include "phymul/installation.hpp"
+
 namespace phymul::cli {
 
 // Pictures need Debian's Python with matplotlib and VTK (make demo installs them): their
 // absence costs the PNGs, never the numbers, so a failure is a warning.
 inline void make_pictures(const std::string& script_name, const std::string& dir, bool quiet) {
-  const std::string script = PHYMUL_SOURCE_DIR "/scripts/" + script_name;
+  std::string script;
+  try {
+    script = (share_directory() / "scripts" / script_name).string();
+  } catch (const std::exception& e) {
+    std::cerr << "warning: the pictures were not made: " << e.what() << '\n';
+    return;
+  }
   const int rc =
       std::system(fmt::format("'{}' '{}' {}", script, dir, quiet ? ">/dev/null 2>&1" : "").c_str());
   if (rc != 0)

@@ -7,6 +7,7 @@
 #include <iostream>
 #include <memory>
 
+#include "phymul/installation.hpp"
 #include "phymul/studies/truthcube.hpp"
 #include "phymul/vtk.hpp"
 #include "pictures.hpp"
@@ -16,7 +17,7 @@ namespace {
 
 struct Settings {
   truthcube::StudyOptions study;
-  std::string data = PHYMUL_DATA_DIR "/truthcube/uniaxial_positions.csv";
+  std::string data;  // default: the installed copy of the measured beads
   std::string output = "results/truthcube";
   std::string json_file;
   std::string frame = "polar";
@@ -32,6 +33,8 @@ int run(Settings& s) {
   s.study.fem = !s.no_fem;
   s.study.incompatible_modes = s.fem_hexa == "incompatible";
   try {
+    if (s.data.empty())
+      s.data = (share_directory() / "data" / "truthcube" / "uniaxial_positions.csv").string();
     const auto beads = truthcube::load_beads(s.data);
     const truthcube::Study study = truthcube::run_study(beads, s.study);
     truthcube::write_outputs(study, beads, s.study, s.output);
@@ -58,7 +61,10 @@ TruthcubeCommand add_truthcube_command(CLI::App& parent) {
   app->add_option("--cells", s.study.cells, "hexahedra per cube edge")
       ->check(CLI::Range(2, 64))
       ->capture_default_str();
-  app->add_option("--data", s.data, "bead positions (CSV)")->check(CLI::ExistingFile);
+  app->add_option("--data", s.data,
+                  "bead positions (CSV; default: the measured ones phymul ships, "
+                  "share/phymul/data/truthcube)")
+      ->check(CLI::ExistingFile);
   app->add_option("-o,--output", s.output, "output directory")->capture_default_str();
   app->add_option("--json", s.json_file, "also write the table as JSON to this file");
   app->add_option("--frame", s.frame, "shape-memory frame")

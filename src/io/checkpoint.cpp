@@ -1,4 +1,4 @@
-#include "io/checkpoint.hpp"
+#include "phymul/checkpoint.hpp"
 
 #include <fmt/format.h>
 

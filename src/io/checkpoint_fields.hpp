@@ -3,8 +3,8 @@
 // does not compile).
 #pragma once
 
-#include "io/checkpoint.hpp"
 #include "model/data_fields.hpp"
+#include "phymul/checkpoint.hpp"
 
 namespace phymul {
 

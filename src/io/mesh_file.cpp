@@ -1,5 +1,3 @@
-#include "io/mesh_file.hpp"
-
 #include <fmt/format.h>
 
 #include <cctype>
@@ -9,6 +7,7 @@
 #include <sstream>
 
 #include "io/mesh_text.hpp"
+#include "phymul/mesh_io.hpp"
 
 namespace phymul {
 

@@ -8,8 +8,8 @@
 #include <set>
 #include <unordered_map>
 
-#include "io/mesh_file.hpp"
 #include "io/mesh_text.hpp"
+#include "phymul/mesh_io.hpp"
 
 namespace phymul {
 namespace {

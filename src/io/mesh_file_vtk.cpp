@@ -5,8 +5,8 @@
 #include <climits>
 #include <optional>
 
-#include "io/mesh_file.hpp"
 #include "io/mesh_text.hpp"
+#include "phymul/mesh_io.hpp"
 
 namespace phymul {
 namespace {

@@ -6,7 +6,7 @@
 #include <string_view>
 #include <vector>
 
-#include "io/mesh_file.hpp"
+#include "phymul/mesh_io.hpp"
 
 namespace phymul::mesh_io {
 

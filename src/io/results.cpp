@@ -1,4 +1,4 @@
-#include "io/results.hpp"
+#include "phymul/results.hpp"
 
 #include <fmt/format.h>
 
@@ -64,10 +64,8 @@ ResultWriter::ResultWriter(std::filesystem::path dir, std::string stem, const Mo
   force_.resize(n);
 }
 
-void ResultWriter::frame(Simulator& sim) {
+void ResultWriter::frame(const Model& m, const Data& s) {
   if (!vtk_) return;
-  const Model& m = sim.model();
-  const Data& s = sim.data();
   for (int i = 0; i < m.node_count(); ++i)
     for (int a = 0; a < 3; ++a) {
       displacement_[3 * i + a] = s.x[i][a] - m.rest_position[i][a];
@@ -79,7 +77,7 @@ void ResultWriter::frame(Simulator& sim) {
   const CellField cells[] = {{"component", m.cell_component}};
   const std::string name = fmt::format("{}_{:06d}.vtu", stem_, pvd_.size());
   write_vtu(dir_ / name, s.x, m.cells, points, cells, encoding_);
-  write_obstacles(sim, int(pvd_.size()));
+  write_obstacles(m, s, int(pvd_.size()));
   pvd_.push_back({s.time, name});
   series_stale_ = true;
   const auto now = std::chrono::steady_clock::now();
@@ -113,10 +111,10 @@ std::string obstacle_frame_name(const std::string& stem, size_t frame) {
 
 }  // namespace
 
-void ResultWriter::write_obstacles(Simulator& sim, int frame) {
+void ResultWriter::write_obstacles(const Model& m, const Data& s, int frame) {
   if (!has_obstacles_) return;
-  write_obstacle_surfaces(dir_ / obstacle_frame_name(stem_, size_t(frame)), sim.model().obstacles,
-                          sim.data().load_time, sim.data().x, encoding_);
+  write_obstacle_surfaces(dir_ / obstacle_frame_name(stem_, size_t(frame)), m.obstacles,
+                          s.load_time, s.x, encoding_);
 }
 
 // The obstacles' frames are named after the body's, at the same times, so their list
@@ -129,20 +127,17 @@ void ResultWriter::write_obstacle_pvd() {
   write_pvd(dir_ / (stem_ + "_obstacles.pvd"), entries);
 }
 
-void ResultWriter::monitor(Simulator& sim) {
-  const std::vector<double> volumes = sim.component_volumes();
-  std::string row = fmt::format("{},{},{},{}", sim.data().time, sim.kinetic_energy(),
-                                sim.data().shape_memory_energy, sim.max_residual_force());
+void ResultWriter::monitor(const Model& m, Data& s) {
+  const std::vector<double> volumes = component_volumes(m, s);
+  std::string row = fmt::format("{},{},{},{}", s.time, kinetic_energy(m, s), s.shape_memory_energy,
+                                max_residual_force(m, s));
   for (int c : closed_components_) row += fmt::format(",{}", volumes[c]);
-  for (size_t b = 0; b < sim.model().rigid_bodies.size(); ++b)
-    row += fmt::format(
-        ",{}", (sim.data().bodies[b].center - sim.model().rigid_bodies[b].rest_center).norm());
-  for (const Vec3& f : sim.data().contact_force)
-    row += fmt::format(",{},{},{}", f.x(), f.y(), f.z());
-  for (const Vec3& f : sim.data().pair_contact_force)
-    row += fmt::format(",{},{},{}", f.x(), f.y(), f.z());
+  for (size_t b = 0; b < m.rigid_bodies.size(); ++b)
+    row += fmt::format(",{}", (s.bodies[b].center - m.rigid_bodies[b].rest_center).norm());
+  for (const Vec3& f : s.contact_force) row += fmt::format(",{},{},{}", f.x(), f.y(), f.z());
+  for (const Vec3& f : s.pair_contact_force) row += fmt::format(",{},{},{}", f.x(), f.y(), f.z());
   write_monitors(row + '\n');
-  monitored_time_ = sim.data().time;
+  monitored_time_ = s.time;
 }
 
 void ResultWriter::write_monitors(const std::string& text) {

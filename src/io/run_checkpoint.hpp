@@ -7,8 +7,8 @@
 #include <optional>
 #include <string>
 
-#include "io/checkpoint.hpp"
-#include "io/results.hpp"
+#include "phymul/checkpoint.hpp"
+#include "phymul/results.hpp"
 #include "phymul/run.hpp"
 #include "phymul/simulation.hpp"
 

@@ -4,9 +4,9 @@
 
 #include <memory>
 
-#include "io/mesh_file.hpp"
 #include "io/units.hpp"
 #include "phymul/calibration.hpp"
+#include "phymul/mesh_io.hpp"
 #include "phymul/scene_io.hpp"
 
 namespace phymul {

@@ -1,6 +1,6 @@
 // Checkpoint and resume: a run stopped part way (by --stop-after, a signal or SIGKILL) and
 // resumed writes the same files, byte for byte, as the run never stopped.
-#include "io/checkpoint.hpp"
+#include "phymul/checkpoint.hpp"
 
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -405,7 +405,7 @@ namespace {
 // resumed run must restore the bodies too, or the bone restarts from rest.
 TEST(Checkpoint, RigidBodiesAndFibresResumeByteForByte) {
   TempDir dir;
-  const fs::path scene = fs::path(PHYMUL_SOURCE_DIR) / "examples" / "muscle.yaml";
+  const fs::path scene = testing::source_dir() / "examples" / "muscle.yaml";
   const fs::path full = dir.path() / "full", part = dir.path() / "part";
   ASSERT_EQ(phymul(scene.string() + " -o " + full.string()).exit_code, 0);
   const auto r1 = phymul(scene.string() + " -o " + part.string() + " --stop-after 12001");
@@ -426,7 +426,7 @@ namespace {
 // crash.
 TEST(Checkpoint, DataThatDoesNotFitTheModelIsRefusedByName) {
   TempDir dir;
-  const fs::path scene = fs::path(PHYMUL_SOURCE_DIR) / "examples" / "probe.yaml";
+  const fs::path scene = testing::source_dir() / "examples" / "probe.yaml";
   const fs::path part = dir.path() / "part";
   ASSERT_EQ(phymul(scene.string() + " -o " + part.string() + " --stop-after 100").exit_code, 130);
   Checkpoint c = read_checkpoint(part / "checkpoint.bin");

@@ -1,13 +1,12 @@
 // Mesh files: legacy VTK and Gmsh ASCII read back exactly what meshio wrote; physical groups
 // become node sets; every damaged file names its line and what is wrong.
-#include "io/mesh_file.hpp"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <fstream>
 #include <sstream>
 
+#include "phymul/mesh_io.hpp"
 #include "phymul/model.hpp"
 #include "phymul/scene.hpp"
 #include "phymul/scene_io.hpp"

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "io/results.hpp"
+#include "phymul/results.hpp"
 #include "phymul/scene.hpp"
 #include "phymul/scene_io.hpp"
 #include "support/process.hpp"

@@ -12,13 +12,14 @@
 
 #include "phymul/scene.hpp"
 #include "phymul/scene_io.hpp"
+#include "support/process.hpp"
 
 namespace phymul {
 namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kBadScenes = fs::path(PHYMUL_SOURCE_DIR) / "tests/data/bad_scenes";
+fs::path bad_scenes() { return testing::source_dir() / "tests/data/bad_scenes"; }
 
 // "# expect: <substring>" lines of a corpus file: each names one diagnostic.
 std::vector<std::string> expectations(const fs::path& file) {
@@ -32,7 +33,7 @@ std::vector<std::string> expectations(const fs::path& file) {
 
 std::vector<fs::path> corpus() {
   std::vector<fs::path> files;
-  for (const auto& entry : fs::directory_iterator(kBadScenes))
+  for (const auto& entry : fs::directory_iterator(bad_scenes()))
     if (entry.path().extension() == ".yaml") files.push_back(entry.path());
   std::sort(files.begin(), files.end());
   return files;
@@ -77,7 +78,7 @@ TEST(SceneBadTest, EveryCorpusFileReportsExactlyItsExpectedDiagnostics) {
 
 TEST(SceneBadTest, WhatJoinsAllDiagnosticsWithNewlines) {
   try {
-    load_scene(kBadScenes / "out_of_range.yaml");
+    load_scene(bad_scenes() / "out_of_range.yaml");
     FAIL() << "no SceneError";
   } catch (const SceneError& e) {
     std::string lines;
@@ -88,7 +89,7 @@ TEST(SceneBadTest, WhatJoinsAllDiagnosticsWithNewlines) {
 }
 
 TEST(SceneBadTest, DiagnosticsAreSortedByPosition) {
-  const auto diagnostics = diagnostics_of([] { load_scene(kBadScenes / "out_of_range.yaml"); });
+  const auto diagnostics = diagnostics_of([] { load_scene(bad_scenes() / "out_of_range.yaml"); });
   EXPECT_TRUE(std::is_sorted(diagnostics.begin(), diagnostics.end(), [](auto& a, auto& b) {
     return std::pair(a.loc.line, a.loc.column) < std::pair(b.loc.line, b.loc.column);
   }));
@@ -102,7 +103,7 @@ TEST(SceneBadTest, MissingFileNamesTheFileAndTheReason) {
 }
 
 TEST(SceneBadTest, DirectoryIsNotAScene) {
-  const auto diagnostics = diagnostics_of([] { load_scene(kBadScenes); });
+  const auto diagnostics = diagnostics_of([] { load_scene(bad_scenes()); });
   ASSERT_EQ(diagnostics.size(), 1u);
   EXPECT_NE(diagnostics[0].str().find("Is a directory"), std::string::npos);
 }

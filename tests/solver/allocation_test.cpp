@@ -13,6 +13,7 @@
 #include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
 #include "support/models.hpp"
+#include "support/process.hpp"
 
 // AddressSanitizer brings its own operator new; replacing it there mixes allocators.
 // (GCC says so by __SANITIZE_ADDRESS__, clang by __has_feature.)
@@ -132,7 +133,7 @@ TEST(Simulator, StepsDoNotAllocate) {
 // allocating too.
 TEST(Simulator, OrganExampleStepsDoNotAllocate) {
   if (!PHYMUL_COUNT_ALLOCATIONS) GTEST_SKIP() << "allocations are counted in the normal build only";
-  const std::filesystem::path examples = std::filesystem::path(PHYMUL_SOURCE_DIR) / "examples";
+  const std::filesystem::path examples = testing::source_dir() / "examples";
   for (const char* name : {"muscle.yaml", "fig1c_ligament.yaml", "fig1b_doubled_nodes.yaml"}) {
     for (Integrator integrator : {Integrator::verlet, Integrator::newton_cotes}) {
       Model model = compile_scene(load_scene(examples / name));
@@ -149,8 +150,7 @@ TEST(Simulator, OrganExampleStepsDoNotAllocate) {
 // velocity projection and residual's pressures work in preallocated storage.
 TEST(Simulator, CoupledVolumeStepsDoNotAllocate) {
   if (!PHYMUL_COUNT_ALLOCATIONS) GTEST_SKIP() << "allocations are counted in the normal build only";
-  const std::filesystem::path scene =
-      std::filesystem::path(PHYMUL_SOURCE_DIR) / "bench" / "coupled_volumes.yaml";
+  const std::filesystem::path scene = testing::source_dir() / "bench" / "coupled_volumes.yaml";
   for (Integrator integrator : {Integrator::verlet, Integrator::newton_cotes}) {
     Model model = compile_scene(load_scene(scene));
     ASSERT_TRUE(model.coupled_volumes);
@@ -228,7 +228,7 @@ TEST(Simulator, ProstateStudyStepsDoNotAllocateOnOneThread) {
   if (!PHYMUL_COUNT_C_ALLOCATIONS)
     GTEST_SKIP() << "C allocations are counted with glibc in the normal build only";
   const std::filesystem::path scene =
-      std::filesystem::path(PHYMUL_SOURCE_DIR) / "examples" / "prostate" / "50mL_rigid.yaml";
+      testing::source_dir() / "examples" / "prostate" / "50mL_rigid.yaml";
   const int threads = omp_get_max_threads();
   omp_set_num_threads(1);
   Simulator sim(compile_scene(load_scene(scene)));

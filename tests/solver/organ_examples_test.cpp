@@ -7,11 +7,12 @@
 #include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
 #include "solver/rigid.hpp"
+#include "support/process.hpp"
 
 namespace phymul {
 namespace {
 
-const std::filesystem::path kExamples = std::filesystem::path(PHYMUL_SOURCE_DIR) / "examples";
+std::filesystem::path examples() { return testing::source_dir() / "examples"; }
 
 int component(const Model& model, const std::string& name) {
   for (int c = 0; c < int(model.components.size()); ++c)
@@ -29,7 +30,7 @@ int body_of(const Model& model, const std::string& name) {
 }
 
 TEST(OrganExamples, LigamentStaticEquilibriumMatchesTheHandCalculation) {
-  Simulator sim(compile_scene(load_scene(kExamples / "fig1c_ligament.yaml")));
+  Simulator sim(compile_scene(load_scene(examples() / "fig1c_ligament.yaml")));
   const StaticResult r = sim.solve_static();
   ASSERT_TRUE(r.converged) << r.residual;
   const Model& model = sim.model();
@@ -74,7 +75,7 @@ namespace phymul {
 namespace {
 
 TEST(OrganExamples, MuscleLiftsTheLoad) {
-  Simulator sim(compile_scene(load_scene(kExamples / "muscle.yaml")));
+  Simulator sim(compile_scene(load_scene(examples() / "muscle.yaml")));
   const Model& model = sim.model();
   const int lower = body_of(model, "lower_bone");
   auto height = [&] { return sim.data().bodies[lower].center.z(); };

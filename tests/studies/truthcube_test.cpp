@@ -9,10 +9,12 @@
 namespace phymul::truthcube {
 namespace {
 
-const std::filesystem::path kData = testing::source_dir() / "data/truthcube/uniaxial_positions.csv";
+std::filesystem::path data_file() {
+  return testing::source_dir() / "data/truthcube/uniaxial_positions.csv";
+}
 
 TEST(TruthCube, LoadsTheMeasuredBeads) {
-  const auto beads = load_beads(kData);
+  const auto beads = load_beads(data_file());
   ASSERT_EQ(beads.size(), 343u);
   // First data row of the file: 1,1,1,-29.69,-28.86,12.62,...,-31.85,-31.08,14.38
   EXPECT_EQ(beads[0].index, (std::array<int, 3>{1, 1, 1}));
@@ -32,7 +34,7 @@ TEST(TruthCube, LoadsTheMeasuredBeads) {
 
 TEST(TruthCube, MalformedDataNamesFileLineAndColumn) {
   testing::TempDir dir;
-  std::ifstream in(kData);
+  std::ifstream in(data_file());
   std::string text((std::istreambuf_iterator<char>(in)), {});
   const size_t row = text.find("1,1,2,");
   text.replace(text.find(',', row + 6) + 1, 6, "abc");  // y0 of bead (1,1,2)
@@ -67,7 +69,7 @@ TEST(TruthCube, EmbeddingIsExactForTrilinearFields) {
 }
 
 TEST(TruthCube, MetricsFollowTheirDefinitions) {
-  const auto beads = load_beads(kData);
+  const auto beads = load_beads(data_file());
   // Simulated = measured shifted by 1 mm in x: every error is 1 mm, and the best translation
   // removes it.
   std::vector<Vec3> simulated;
@@ -86,7 +88,7 @@ TEST(TruthCube, MetricsFollowTheirDefinitions) {
 }
 
 TEST(TruthCube, ShapeMemoryStudyBeatsStandingStillAndKeepsVolume) {
-  const auto beads = load_beads(kData);
+  const auto beads = load_beads(data_file());
   StudyOptions o;
   o.fem = false;
   const Study with_volume = run_study(beads, o);
@@ -115,7 +117,7 @@ TEST(TruthCube, ShapeMemoryStudyBeatsStandingStillAndKeepsVolume) {
 // stiffens faster: measured at 4^3 1.7 / 6.3 / 9.0 % above the FEM at 5 / 12.5 / 18.25 %
 // (at 8^3: 3.6 / 12.8 / 19.8 %, README).
 TEST(TruthCube, ShapeMemoryPlateForceFromYoungStiffensFasterThanTheFem) {
-  const auto beads = load_beads(kData);
+  const auto beads = load_beads(data_file());
   StudyOptions o;
   o.cells = 4;
   const Study study = run_study(beads, o);
@@ -136,7 +138,7 @@ TEST(TruthCube, ShapeMemoryPlateForceFromYoungStiffensFasterThanTheFem) {
 // constraints at nu = 0.499, so that element is the stiffer one, by 5.3 % of the plate force
 // at 4^3 and 1.7 % at 8^3 (measured). 4^3 cells keep the test short.
 TEST(TruthCube, FemWithEitherHexahedronGivesNearlyTheSameBeads) {
-  const auto beads = load_beads(kData);
+  const auto beads = load_beads(data_file());
   StudyOptions o;
   o.cells = 4;
   o.fem = true;

@@ -5,10 +5,12 @@
 
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 
 namespace phymul::testing {
@@ -51,7 +53,16 @@ class TempDir {
   std::filesystem::path path_;
 };
 
-inline std::string cli() { return PHYMUL_CLI; }
-inline std::filesystem::path source_dir() { return PHYMUL_SOURCE_DIR; }
+// The source tree and the program under test, from the environment ctest gives each test
+// (tests/CMakeLists.txt): no path of the build machine is compiled into the tests.
+inline std::string required_environment(const char* name) {
+  const char* value = std::getenv(name);
+  if (!value || !*value)
+    throw std::runtime_error(std::string(name) +
+                             " is not set: run the tests through ctest, or set it by hand");
+  return value;
+}
+inline std::string cli() { return required_environment("PHYMUL_CLI"); }
+inline std::filesystem::path source_dir() { return required_environment("PHYMUL_SOURCE_DIR"); }
 
 }  // namespace phymul::testing

@@ -1,4 +1,6 @@
-// The files of a run: frames (.vtu and the .pvd listing them), monitors.csv, report.json.
+// The files of a run, as `phymul run` writes them: frames (.vtu and the .pvd listing them,
+// which ParaView opens), monitors.csv (a row of energies, residual, volumes, contact forces
+// per call), report.json.
 #pragma once
 
 #include <chrono>
@@ -23,10 +25,13 @@ class ResultWriter {
   // file (half a millisecond on the study's machine, more than a binary frame's numbers), so
   // while running they are rewritten for the first frame and then at most every
   // kSeriesInterval of wall-clock time; finish() (or the destructor, on an error) lists all.
-  void frame(Simulator& sim);
+  void frame(const Model& model, const Data& data);
+  void frame(Simulator& sim) { frame(sim.model(), sim.data()); }
   static constexpr std::chrono::milliseconds kSeriesInterval{500};
   ~ResultWriter();
-  void monitor(Simulator& sim);          // one row of monitors.csv
+  // One row of monitors.csv (its residual force uses data's workspace).
+  void monitor(const Model& model, Data& data);
+  void monitor(Simulator& sim) { monitor(sim.model(), sim.data()); }
   void finish(const RunReport& report);  // monitors.csv complete, report.json
   int frames() const { return int(pvd_.size()); }
   // Checkpoints: what was written so far, and resuming from it (the frames listed must be
@@ -48,7 +53,7 @@ class ResultWriter {
   std::string monitors_text_;  // what monitors_ was given
   double monitored_time_ = std::numeric_limits<double>::quiet_NaN();
   void write_monitors(const std::string& text);
-  void write_obstacles(Simulator& sim, int frame);
+  void write_obstacles(const Model& model, const Data& data, int frame);
   void write_obstacle_pvd();
   void write_series();         // both .pvd
   bool series_stale_ = false;  // frames written since the .pvd last were
