@@ -48,40 +48,27 @@ format:
 	@clang-format -i $$(git ls-files '*.cpp' '*.hpp')
 
 clean:
-	@rm -rf $(BUILD) $(BUILD).configure.log $(BUILD)-asan $(BUILD)-asan.configure.log
+	@rm -rf $(BUILD) $(BUILD).configure.log $(BUILD)-asan $(BUILD)-asan.configure.log \
+		$(FUZZ_DIR) $(FUZZ_DIR).configure.log
 
 # Fuzzing (libFuzzer + ASan + UBSan, clang): the scene reader, the Truth Cube CSV reader, the
 # VTK and Gmsh mesh readers and the checkpoint reader, each run for FUZZ_SECONDS from a seed
 # corpus; findings are written as build-fuzz/crash-*.
 FUZZ_DIR ?= build-fuzz
 FUZZ_SECONDS ?= 60
-FUZZ_CXX ?= clang++-14
-FUZZ_FLAGS := -std=c++20 -O1 -g -fno-omit-frame-pointer -Iinclude -Isrc -I/usr/include/eigen3
-FUZZ_SANITIZE := -fsanitize=address,undefined
-FUZZ_LIBS := -lyaml-cpp -lfmt
-FUZZ_LIB_SRCS := $(wildcard src/io/scene.cpp src/io/scene_reader*.cpp src/io/units.cpp \
-	src/io/parameter_table.cpp src/mesh/*.cpp src/studies/truthcube.cpp src/io/mesh_file*.cpp \
-	src/io/checkpoint.cpp src/io/vtk.cpp src/io/vtk_appended.cpp)
-FUZZ_LIB_OBJS := $(patsubst src/%.cpp,$(FUZZ_DIR)/obj/%.o,$(FUZZ_LIB_SRCS))
 
 .PHONY: fuzz fuzz-build
-.SECONDARY: $(FUZZ_LIB_OBJS)
 
-$(FUZZ_DIR)/obj/%.o: src/%.cpp
-	@mkdir -p $(dir $@)
-	$(FUZZ_CXX) $(FUZZ_FLAGS) $(FUZZ_SANITIZE) -fsanitize=fuzzer-no-link -c $< -o $@
-
-$(FUZZ_DIR)/%: fuzz/%.cpp $(FUZZ_LIB_OBJS)
-	@mkdir -p $(dir $@)
-	$(FUZZ_CXX) $(FUZZ_FLAGS) $(FUZZ_SANITIZE) -fsanitize=fuzzer $< $(FUZZ_LIB_OBJS) \
-		$(FUZZ_LIBS) -o $@
+fuzz-build: deps-sanitize
+	@cmake -S . -B $(FUZZ_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++-14 \
+		-DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DPHYMUL_SANITIZE=ON -DPHYMUL_FUZZ=ON \
+		-DPHYMUL_BENCH=OFF > $(FUZZ_DIR).configure.log 2>&1 || (cat $(FUZZ_DIR).configure.log; exit 1)
+	@cmake --build $(FUZZ_DIR) -j$(JOBS) --target $(patsubst %,%_fuzz,$(FUZZ_TARGETS))
 
 FUZZ_TARGETS := scene truthcube mesh_vtk mesh_gmsh checkpoint
 FUZZ_RUN = ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	./$(1)_fuzz -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 \
 	-print_final_stats=1 corpus/$(1)
-
-fuzz-build: deps-sanitize $(patsubst %,$(FUZZ_DIR)/%_fuzz,$(FUZZ_TARGETS))
 
 fuzz: fuzz-build
 	@for t in $(FUZZ_TARGETS); do mkdir -p $(FUZZ_DIR)/corpus/$$t; done

@@ -16,7 +16,7 @@ namespace {
 void parse(const std::string& bytes) {
   try {
     const phymul::Checkpoint c = phymul::parse_checkpoint(bytes, "fuzz");
-    if (c.state.v.size() != c.state.x.size() || c.state.f.size() != c.state.x.size()) {
+    if (c.data.v.size() != c.data.x.size() || c.data.f.size() != c.data.x.size()) {
       std::fprintf(stderr, "arrays of different sizes accepted\n");
       std::abort();
     }
