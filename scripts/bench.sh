@@ -9,8 +9,8 @@ set -euo pipefail
 build=${1:-build}
 root=$(cd "$(dirname "$0")/.." && pwd)
 # The shared VM's speed moves by a quarter within minutes: the step and prostate benchmarks run
-# three times each, their repetitions interleaved at random, and the README quotes the median
-# (the JSON keeps every run and the mean, median, stddev and cv aggregates).
+# three times each, their repetitions interleaved at random, and docs/performance.md quotes the
+# median (the JSON keeps every run and the mean, median, stddev and cv aggregates).
 repeat=(--benchmark_repetitions=3 --benchmark_enable_random_interleaving=true)
 "$root/$build/bench/phymul_bench" --benchmark_out="$root/bench/results.json" \
   --benchmark_out_format=json --benchmark_counters_tabular=true "${repeat[@]}"

@@ -41,17 +41,17 @@ TEST(Cli, MissingSceneFileIsAnError) {
   EXPECT_NE(r.output.find("/nonexistent/scene.yaml"), std::string::npos) << r.output;
 }
 
-TEST(Cli, ReadmeSceneReferenceIsTheGeneratedOne) {
+TEST(Cli, SceneReferenceDocIsTheGeneratedOne) {
   const auto r = run_command(cli() + " schema");
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const std::string readme = testing::read_text(source_dir() / "README.md");
+  const std::string doc = testing::read_text(source_dir() / "docs/scene-reference.md");
   const std::string begin = "<!-- scene-reference:begin -->\n",
                     end = "<!-- scene-reference:end -->";
-  const size_t b = readme.find(begin), e = readme.find(end);
+  const size_t b = doc.find(begin), e = doc.find(end);
   ASSERT_NE(b, std::string::npos);
   ASSERT_NE(e, std::string::npos);
-  EXPECT_EQ(readme.substr(b + begin.size(), e - b - begin.size()), r.output)
-      << "regenerate the README section with: build/phymul schema";
+  EXPECT_EQ(doc.substr(b + begin.size(), e - b - begin.size()), r.output)
+      << "regenerate docs/scene-reference.md with: build/phymul schema";
 }
 
 }  // namespace

@@ -96,9 +96,10 @@ TEST(ProstateStudy, RigidProbeRisesIntoThePushedProstate) {
 
 TEST(ProstateStudy, WithAFiniteElementProstateTheEmptyBladderCaseDeformsMore) {
   // The paper's direction, which the finite-element prostate (E = 20 kPa, nu = 0.45) shows
-  // with the fine bladder (642 nodes, nine neck nodes chosen by the prostate: README "The
-  // prostate study", 15.13 % empty, 14.82 % full). With the study's coarse bladder the sign
-  // goes the other way: the effect is smaller than the bladder mesh's (README, mesh table).
+  // with the fine bladder (642 nodes, nine neck nodes chosen by the prostate:
+  // docs/validation.md "The prostate study", 15.13 % empty, 14.82 % full). With the study's
+  // coarse bladder the sign goes the other way: the effect is smaller than the bladder mesh's
+  // (docs/validation.md, "Real time", mesh table).
   Options o;
   o.prostate_model = ElasticModel::fem;
   o.bladder_subdivisions = 3;

@@ -115,7 +115,7 @@ TEST(TruthCube, ShapeMemoryStudyBeatsStandingStillAndKeepsVolume) {
 // The plate force in forces, not only at the beads: the shape memory at the K a scene giving
 // E = 14.9 kPa and nu = 0.499 gets (calibrated at 1 % on this mesh) against the FEM. It
 // stiffens faster: measured at 4^3 1.7 / 6.3 / 9.0 % above the FEM at 5 / 12.5 / 18.25 %
-// (at 8^3: 3.6 / 12.8 / 19.8 %, README).
+// (at 8^3: 3.6 / 12.8 / 19.8 %, docs/validation.md).
 TEST(TruthCube, ShapeMemoryPlateForceFromYoungStiffensFasterThanTheFem) {
   const auto beads = load_beads(data_file());
   StudyOptions o;
