@@ -26,8 +26,36 @@ def run(*args, **kwargs):
     return result.stdout
 
 
+def python_module(prefix, scene, points, env, sanitized):
+    """The installed Python module, as /usr/bin/python3 imports it from the prefix's
+    dist-packages, steps the scene to the program's last frame."""
+    packages = list(prefix.glob("lib/python3*/dist-packages"))
+    if not packages:
+        if sanitized:  # the interpreter cannot load a sanitized module: none is built
+            return
+        sys.exit("the installation lacks the Python module (lib/python3.X/dist-packages)")
+    script = (
+        "import math, sys, phymul\n"
+        "model = phymul.compile(phymul.load_scene(sys.argv[1]))\n"
+        "data = phymul.Data(model)\n"
+        "steps = math.ceil(model.duration / data.dt - 1e-9)\n"
+        "data.dt = model.duration / steps\n"
+        "phymul.step(model, data, n=steps)\n"
+        "print(phymul.__file__)\n"
+        "for x in data.positions: print(*(repr(float(v)) for v in x))\n")
+    lines = run("/usr/bin/python3", "-c", script, scene,
+                env=dict(env, PYTHONPATH=str(packages[0]))).splitlines()
+    if not lines[0].startswith(str(prefix)):
+        sys.exit(f"the Python module imported is not the installed one: {lines[0]}")
+    stepped = [tuple(float(v) for v in line.split()) for line in lines[1:]]
+    if stepped != [tuple(float(v) for v in p) for p in points]:
+        sys.exit("the installed Python module does not end on phymul run's last frame")
+
+
 def main():
     build, source, work = map(pathlib.Path, sys.argv[1:4])
+    # A sanitized build's runtime records source paths (it is for tests, never installed).
+    sanitized = "--sanitized" in sys.argv[4:]
     shutil.rmtree(work, ignore_errors=True)
     prefix = work / "prefix"
     run("cmake", "--install", build, "--prefix", prefix)
@@ -41,7 +69,7 @@ def main():
     # Nothing installed names the source tree (the program finds its data beside itself).
     needle = str(source.resolve()).encode()
     for path in prefix.rglob("*"):
-        if path.is_file() and needle in path.read_bytes():
+        if not sanitized and path.is_file() and needle in path.read_bytes():
             sys.exit(f"{path.relative_to(prefix)} holds the source tree's path {needle.decode()}")
 
     embed = work / "embed"
@@ -76,6 +104,7 @@ def main():
                 work / "truthcube", env=env)
     if "18.25%" not in table:
         sys.exit(f"the installed truthcube study printed no table:\n{table}")
+    python_module(prefix, scene, points, env, sanitized)
     print(f"installed to {prefix}; embed and phymul run agree on {len(points)} nodes, bit for "
           f"bit (largest sag {moved * 1e3:.3g} mm)")
 
