@@ -66,6 +66,25 @@ class Owned {
 };
 }  // namespace detail
 
+// The inputs a program may steer between steps (a controller: the Python module, a live
+// view): made from the model's schedules by allocate_data, and read by every step from here,
+// so that setting one changes this Data's run only.
+struct Controls {
+  std::vector<Vec3> applied_force;         // N per node, added to the loads; empty: none
+  std::vector<Schedule> obstacle_motion;   // per obstacle: translation of its shape, m
+  std::vector<Schedule> pressure;          // per pressure load: Pa in x
+  std::vector<Schedule> target_volume;     // per volume constraint: m^3 in x; empty: rest volume
+  std::vector<Schedule> body_translation;  // per rigid body (driven ones follow it): m
+  std::vector<Schedule> body_rotation;     // per rigid body: rad, a rotation vector
+};
+
+// A volume constraint's target (m^3) at load_time under these controls.
+inline double target_volume(const Model& model, const Controls& controls, size_t k,
+                            double load_time) {
+  const Schedule& s = controls.target_volume[k];
+  return s.empty() ? model.volumes[k].target_volume : s.at(load_time).x();
+}
+
 struct Data {
   double time = 0.0;       // s
   long step = 0;           // steps taken (dynamics) or relaxation iterations (statics)
@@ -93,6 +112,7 @@ struct Data {
   double stable_dt = 0.0;  // s, the stability estimate `dt: auto` takes its share of
   double load_time = 0.0;  // s, the load time at which f was evaluated
   StaticProgress static_progress;
+  Controls controls;
 
   detail::Owned<Workspace> work;  // not saved: see Workspace
 };

@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <memory>
+#include <thread>
 
 #include "phymul/data.hpp"
 #include "phymul/model.hpp"
@@ -20,10 +21,12 @@ struct PyData {
   std::shared_ptr<const Model> model;
   Data data;
   std::atomic<bool> busy{false};
+  std::atomic<std::thread::id> owner{};  // the thread holding busy
   py::object controller;  // f(model, data) before each step of phymul.step; null: none
 };
 
-// Holds PyData::busy for a call; RuntimeError when another thread holds it.
+// Holds PyData::busy for a call; RuntimeError when another thread holds it. The thread that
+// holds it may enter again (a controller, called between steps, sets the controls).
 class Busy {
  public:
   explicit Busy(PyData& d);
@@ -33,6 +36,7 @@ class Busy {
 
  private:
   PyData& d_;
+  bool nested_ = false;
 };
 
 // A NumPy view of `count` rows of `columns` T at `data` (row stride: `stride` bytes) whose

@@ -13,12 +13,23 @@
 namespace phymul::python {
 
 Busy::Busy(PyData& d) : d_(d) {
-  if (d_.busy.exchange(true))
-    throw std::runtime_error(
-        "this Data is being stepped in another thread; give each thread "
-        "its own Data (phymul.Data(model))");
+  if (!d_.busy.exchange(true)) {
+    d_.owner = std::this_thread::get_id();
+    return;
+  }
+  if (d_.owner.load() == std::this_thread::get_id()) {
+    nested_ = true;
+    return;
+  }
+  throw std::runtime_error(
+      "this Data is being stepped in another thread; give each thread its own Data "
+      "(phymul.Data(model))");
 }
-Busy::~Busy() { d_.busy = false; }
+Busy::~Busy() {
+  if (nested_) return;
+  d_.owner = std::thread::id{};
+  d_.busy = false;
+}
 
 namespace {
 
@@ -96,6 +107,150 @@ py::dict static_result(const StaticResult& r) {
   return d;
 }
 
+// The entry of `count` named by an index or by name (names(k) gives entry k's).
+template <class Name>
+size_t entry(py::handle key, size_t count, Name names, const char* what) {
+  if (py::isinstance<py::str>(key)) {
+    const std::string wanted = key.cast<std::string>();
+    std::string known;
+    for (size_t k = 0; k < count; ++k) {
+      if (names(k) == wanted) return k;
+      known += (known.empty() ? "" : ", ") + names(k);
+    }
+    throw py::key_error(std::string("no ") + what + " '" + wanted +
+                        "' (known: " + (known.empty() ? "none" : known) + ")");
+  }
+  if (!PyIndex_Check(key.ptr())) throw py::type_error(std::string(what) + ": an index or a name");
+  const long long k = key.cast<long long>();
+  if (k < 0 || k >= (long long)count)
+    throw py::index_error(std::string(what) + " index " + std::to_string(k) + " out of range (" +
+                          std::to_string(count) + ")");
+  return size_t(k);
+}
+
+Vec3 finite_vector(py::handle value, const char* what) {
+  const auto v = value.cast<std::vector<double>>();
+  if (v.size() != 3) throw py::value_error(std::string(what) + " takes three numbers");
+  for (double c : v)
+    if (!std::isfinite(c)) throw py::value_error(std::string(what) + " must be finite");
+  return {v[0], v[1], v[2]};
+}
+
+// A control changed by a program: from its value now to `value` at the end of the next step,
+// held after; the step sees the change as a motion over its dt (the contact's friction and
+// the obstacle's velocity included).
+void ramp(Schedule& s, const Data& d, const Vec3& value) {
+  const Vec3 now = s.empty() ? value : Vec3(s.at(d.time));
+  s = Schedule{{d.time, d.time + d.dt}, {now, value}};
+}
+
+std::string component_name(const Model& m, int component) {
+  return m.components[size_t(component)].name;
+}
+
+void bind_controls(py::class_<PyData, std::shared_ptr<PyData>>& c) {
+  c.def_property_readonly(
+      "applied_forces",
+      [](py::object self) {
+        PyData& d = self.cast<PyData&>();
+        if (d.data.controls.applied_force.empty()) {
+          Busy busy(d);  // sized once and never shrunk: views of it stay valid
+          d.data.controls.applied_force.assign(d.data.x.size(), Vec3::Zero());
+        }
+        return vec3_view(d.data.controls.applied_force, self, true);
+      },
+      "(n, 3) N, writable: external forces added to the loads at every step");
+  c.def(
+      "obstacle_translation",
+      [](const PyData& d, py::handle key) {
+        const Model& m = *d.model;
+        const size_t k = entry(
+            key, m.obstacles.size(), [&](size_t i) { return m.obstacles[i].name; }, "obstacle");
+        const Vec3 t = d.data.controls.obstacle_motion[k].at(d.data.time);
+        return py::make_tuple(t.x(), t.y(), t.z());
+      },
+      py::arg("obstacle"), "m: the obstacle's translation from its scene position now");
+  c.def(
+      "move_obstacle",
+      [](PyData& d, py::handle key, py::handle translation) {
+        const Model& m = *d.model;
+        const size_t k = entry(
+            key, m.obstacles.size(), [&](size_t i) { return m.obstacles[i].name; }, "obstacle");
+        const Vec3 t = finite_vector(translation, "translation");
+        Busy busy(d);
+        ramp(d.data.controls.obstacle_motion[k], d.data, t);
+      },
+      py::arg("obstacle"), py::arg("translation"),
+      "Moves the obstacle to this translation (m, from its scene position) over the next step");
+  c.def(
+      "move_body",
+      [](PyData& d, py::handle key, py::handle translation, py::handle rotation) {
+        const Model& m = *d.model;
+        const size_t k = entry(
+            key, m.rigid_bodies.size(),
+            [&](size_t i) { return component_name(m, m.rigid_bodies[i].component); }, "rigid body");
+        if (!m.rigid_bodies[k].driven)
+          throw py::value_error("rigid body '" + component_name(m, m.rigid_bodies[k].component) +
+                                "' is free (give it a `motion` in the scene to drive it)");
+        const Vec3 t = finite_vector(translation, "translation");
+        const Vec3 r = finite_vector(rotation, "rotation");
+        Busy busy(d);
+        ramp(d.data.controls.body_translation[k], d.data, t);
+        ramp(d.data.controls.body_rotation[k], d.data, r);
+      },
+      py::arg("body"), py::arg("translation"), py::arg("rotation") = std::vector<double>{0, 0, 0},
+      "Moves a driven rigid body (an instrument) to this translation (m) and rotation vector "
+      "(rad) from its rest pose over the next step");
+  c.def(
+      "pressure",
+      [](const PyData& d, py::handle key) {
+        const Model& m = *d.model;
+        const size_t k = entry(
+            key, m.pressures.size(),
+            [&](size_t i) { return component_name(m, m.pressures[i].component); }, "pressure");
+        return d.data.controls.pressure[k].at(d.data.time).x();
+      },
+      py::arg("load"), "Pa: the pressure load's value now (by index or its object's name)");
+  c.def(
+      "set_pressure",
+      [](PyData& d, py::handle key, double p) {
+        const Model& m = *d.model;
+        const size_t k = entry(
+            key, m.pressures.size(),
+            [&](size_t i) { return component_name(m, m.pressures[i].component); }, "pressure");
+        if (!std::isfinite(p)) throw py::value_error("pressure must be finite (Pa)");
+        Busy busy(d);
+        ramp(d.data.controls.pressure[k], d.data, Vec3(p, 0, 0));
+      },
+      py::arg("load"), py::arg("pressure"), "Pa, reached over the next step");
+  c.def(
+      "target_volume",
+      [](const PyData& d, py::handle key) {
+        const Model& m = *d.model;
+        const size_t k = entry(
+            key, m.volumes.size(), [&](size_t i) { return m.volumes[i].component; },
+            "volume constraint");
+        return target_volume(m, d.data.controls, k, d.data.time);
+      },
+      py::arg("object"), "m^3: the volume constraint's target now");
+  c.def(
+      "set_target_volume",
+      [](PyData& d, py::handle key, double volume) {
+        const Model& m = *d.model;
+        const size_t k = entry(
+            key, m.volumes.size(), [&](size_t i) { return m.volumes[i].component; },
+            "volume constraint");
+        if (!(volume > 0.0) || !std::isfinite(volume))
+          throw py::value_error("target volume must be > 0 m^3 (got " + std::to_string(volume) +
+                                ")");
+        Busy busy(d);
+        Schedule& s = d.data.controls.target_volume[k];
+        if (s.empty()) s = Schedule::constant(Vec3(m.volumes[k].target_volume, 0, 0));
+        ramp(s, d.data, Vec3(volume, 0, 0));
+      },
+      py::arg("object"), py::arg("volume"), "m^3, reached over the next step");
+}
+
 void bind_model_class(py::module_& m) {
   py::class_<Model, std::shared_ptr<Model>>(m, "Model", "A compiled scene: read-only.")
       .def_property_readonly("nodes", [](const Model& model) { return model.rest_position.size(); })
@@ -130,18 +285,19 @@ void bind_model_class(py::module_& m) {
 }
 
 void bind_data_class(py::module_& m) {
-  py::class_<PyData, std::shared_ptr<PyData>>(
-      m, "Data", "Everything a run changes, made for one Model (phymul.Data(model)).")
-      .def(py::init([](std::shared_ptr<Model> model) {
-             auto d = std::make_shared<PyData>();
-             d->model = model;
-             {
-               py::gil_scoped_release release;
-               d->data = make_data(*model);
-             }
-             return d;
-           }),
-           py::arg("model"))
+  py::class_<PyData, std::shared_ptr<PyData>> c(
+      m, "Data", "Everything a run changes, made for one Model (phymul.Data(model)).");
+  bind_controls(c);
+  c.def(py::init([](std::shared_ptr<Model> model) {
+          auto d = std::make_shared<PyData>();
+          d->model = model;
+          {
+            py::gil_scoped_release release;
+            d->data = make_data(*model);
+          }
+          return d;
+        }),
+        py::arg("model"))
       .def_property_readonly("model", [](const PyData& d) { return d.model; })
       .def_property_readonly(
           "positions",

@@ -31,18 +31,22 @@ double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_m
 // work: the volume caches. start: within a step, the positions it began at; a disjoint
 // surface whose velocity projection kept its gradient there moves along that gradient (SHAKE's
 // direction, which saves a gradient pass) rather than along the one at x.
-void project_volumes(const Model& model, Workspace& work, std::span<Vec3> x, double load_time,
-                     std::span<Vec3> scratch, std::span<const Vec3> start = {});
+// controls: the targets (Controls::target_volume).
+void project_volumes(const Model& model, const Controls& controls, Workspace& work,
+                     std::span<Vec3> x, double load_time, std::span<Vec3> scratch,
+                     std::span<const Vec3> start = {});
 
 // All position constraints in the DESIGN's order: prescribed, rigid obstacles (contact.hpp),
 // then volumes (a few Gauss-Seidel sweeps when surfaces share nodes), then doubled nodes
 // (doubled.hpp). Rigid bodies place their nodes before (solver/rigid.hpp).
-void apply_position_constraints(const Model& model, Workspace& work, std::span<Vec3> x,
-                                double load_time, std::span<Vec3> scratch);
+// controls: the obstacles' motions and the volumes' targets.
+void apply_position_constraints(const Model& model, const Controls& controls, Workspace& work,
+                                std::span<Vec3> x, double load_time, std::span<Vec3> scratch);
 // The same within a step: contacts with friction, recording what they moved (contact.hpp).
 struct ContactStep;
-void apply_position_constraints(const Model& model, Workspace& work, std::span<Vec3> x,
-                                double load_time, std::span<Vec3> scratch, ContactStep& contact);
+void apply_position_constraints(const Model& model, const Controls& controls, Workspace& work,
+                                std::span<Vec3> x, double load_time, std::span<Vec3> scratch,
+                                ContactStep& contact);
 
 // Removes from the velocities their rate of change of each constrained volume, along the
 // same mass-weighted direction as the position projection (RATTLE's velocity stage), so

@@ -37,8 +37,8 @@ bool violates(const RigidObstacle& o, double distance) {
 
 // Where the shape's reference point is at a load time: evaluated once per obstacle and
 // stage, not per node (the motion is a schedule to interpolate).
-Vec3 shape_base(const RigidObstacle& o, double load_time) {
-  return o.point + o.motion.at(load_time);
+Vec3 shape_base(const RigidObstacle& o, const Schedule& motion, double load_time) {
+  return o.point + motion.at(load_time);
 }
 
 // obstacle_distance with the shape's base point already placed.
@@ -95,8 +95,8 @@ Vec3 free_axes_of(const Vec3& inverse_mass) {
 }
 
 // Translation of the shape between two load times.
-Vec3 shape_shift(const RigidObstacle& o, double from, double to) {
-  return o.motion.at(to) - o.motion.at(from);
+Vec3 shape_shift(const Schedule& motion, double from, double to) {
+  return motion.at(to) - motion.at(from);
 }
 
 // Position-based Coulomb friction after a normal projection of `normal` metres: the slip
@@ -118,7 +118,12 @@ void apply_friction(const RigidObstacle& o, const Vec3& free, Vec3& x, const Vec
 }  // namespace
 
 SurfaceDistance obstacle_distance(const RigidObstacle& o, const Vec3& x, double load_time) {
-  return distance_from(o, shape_base(o, load_time), x);
+  return distance_from(o, shape_base(o, o.motion, load_time), x);
+}
+
+SurfaceDistance obstacle_distance(const RigidObstacle& o, const Schedule& motion, const Vec3& x,
+                                  double load_time) {
+  return distance_from(o, shape_base(o, motion, load_time), x);
 }
 
 Vec3 closest_surface_point(const RigidObstacle& o, const Vec3& x, double load_time) {
@@ -126,9 +131,10 @@ Vec3 closest_surface_point(const RigidObstacle& o, const Vec3& x, double load_ti
   return x - s.distance * s.normal;
 }
 
-void project_obstacle(const RigidObstacle& o, std::span<const Vec3> inverse_mass, std::span<Vec3> x,
-                      double load_time) {
-  const Vec3 base = shape_base(o, load_time);
+namespace {
+
+void project_obstacle_at(const RigidObstacle& o, std::span<const Vec3> inverse_mass,
+                         std::span<Vec3> x, const Vec3& base) {
   if (o.nodes.empty()) {
     for (size_t i = 0; i < x.size(); ++i)
       project_node(o, free_axes_of(inverse_mass[i]), x[i], base);
@@ -137,16 +143,29 @@ void project_obstacle(const RigidObstacle& o, std::span<const Vec3> inverse_mass
   }
 }
 
-void apply_contacts(const Model& model, std::span<Vec3> x, double load_time) {
-  for (const RigidObstacle& o : model.obstacles)
-    project_obstacle(o, model.inverse_mass, x, load_time);
+}  // namespace
+
+void project_obstacle(const RigidObstacle& o, std::span<const Vec3> inverse_mass, std::span<Vec3> x,
+                      double load_time) {
+  project_obstacle_at(o, inverse_mass, x, shape_base(o, o.motion, load_time));
 }
 
-void apply_contacts(const Model& model, std::span<Vec3> x, double load_time, ContactStep& step) {
+void apply_contacts(const Model& model, const Controls& controls, std::span<Vec3> x,
+                    double load_time) {
   for (size_t k = 0; k < model.obstacles.size(); ++k) {
     const RigidObstacle& o = model.obstacles[k];
-    const Vec3 shift = shape_shift(o, step.start_time, load_time);
-    const Vec3 base = shape_base(o, load_time);
+    project_obstacle_at(o, model.inverse_mass, x,
+                        shape_base(o, controls.obstacle_motion[k], load_time));
+  }
+}
+
+void apply_contacts(const Model& model, const Controls& controls, std::span<Vec3> x,
+                    double load_time, ContactStep& step) {
+  for (size_t k = 0; k < model.obstacles.size(); ++k) {
+    const RigidObstacle& o = model.obstacles[k];
+    const Schedule& motion = controls.obstacle_motion[k];
+    const Vec3 shift = shape_shift(motion, step.start_time, load_time);
+    const Vec3 base = shape_base(o, motion, load_time);
     auto one = [&](int i) {
       const Vec3 free = free_axes_of(model.inverse_mass[i]);
       const Vec3 before = x[i];
@@ -164,8 +183,8 @@ void apply_contacts(const Model& model, std::span<Vec3> x, double load_time, Con
   }
 }
 
-void apply_contact_velocities(const Model& model, std::span<const Vec3> x, std::span<Vec3> v,
-                              double load_time, ContactStep& step) {
+void apply_contact_velocities(const Model& model, const Controls& controls, std::span<const Vec3> x,
+                              std::span<Vec3> v, double load_time, ContactStep& step) {
   if (!model.contact_pairs.empty() && step.pair_contacts)
     apply_deformable_contact_velocities(model, v, *step.pair_contacts, step.pair_impulse);
   if (model.obstacles.empty()) return;
@@ -177,8 +196,9 @@ void apply_contact_velocities(const Model& model, std::span<const Vec3> x, std::
     const RigidObstacle& o = model.obstacles[size_t(k)];
     if (k != placed) {
       placed = k;
-      base = shape_base(o, load_time);
-      shape_velocity = shape_shift(o, step.start_time, load_time) / step.dt;
+      const Schedule& motion = controls.obstacle_motion[size_t(k)];
+      base = shape_base(o, motion, load_time);
+      shape_velocity = shape_shift(motion, step.start_time, load_time) / step.dt;
     }
     const Vec3 n = distance_from(o, base, x[i]).normal;
     const Vec3 push = o.keep_inside ? Vec3(-n) : n;  // the way the shape can push
@@ -198,8 +218,9 @@ void apply_contact_velocities(const Model& model, std::span<const Vec3> x, std::
 Vec3 obstacle_force(const Model& model, const Data& state, int obstacle) {
   const RigidObstacle& o = model.obstacles.at(size_t(obstacle));
   Vec3 force = Vec3::Zero();
+  const Vec3 base = shape_base(o, state.controls.obstacle_motion[size_t(obstacle)], state.time);
   auto add = [&](int i) {
-    const double d = obstacle_distance(o, state.x[i], state.time).distance;
+    const double d = distance_from(o, base, state.x[i]).distance;
     if (std::abs(d) <= 1e-12) force -= state.f[i].cwiseProduct(free_axes_of(model.inverse_mass[i]));
   };
   if (o.nodes.empty()) {

@@ -18,6 +18,9 @@ struct SurfaceDistance {
 // On the medial axis (a sphere's centre, a capsule's segment) the normal is any direction
 // perpendicular to the axis: every one leads to a closest point.
 SurfaceDistance obstacle_distance(const RigidObstacle& obstacle, const Vec3& x, double load_time);
+// The same with the shape moved by `motion` (a Data's controls) instead of its own.
+SurfaceDistance obstacle_distance(const RigidObstacle& obstacle, const Schedule& motion,
+                                  const Vec3& x, double load_time);
 
 // The closest point of the obstacle's surface to x: x - distance * normal.
 Vec3 closest_surface_point(const RigidObstacle& obstacle, const Vec3& x, double load_time);
@@ -28,8 +31,9 @@ Vec3 closest_surface_point(const RigidObstacle& obstacle, const Vec3& x, double 
 void project_obstacle(const RigidObstacle& obstacle, std::span<const Vec3> inverse_mass,
                       std::span<Vec3> x, double load_time);
 
-// Every obstacle of the model, in order.
-void apply_contacts(const Model& model, std::span<Vec3> x, double load_time);
+// Every obstacle of the model, in order, moved by the controls' motions.
+void apply_contacts(const Model& model, const Controls& controls, std::span<Vec3> x,
+                    double load_time);
 
 // What one step's contact stages need and record. Buffers are the caller's, sized once
 // (node count for `touching`, obstacle count for `impulse`): a step allocates nothing.
@@ -49,12 +53,13 @@ struct ContactStep {
 // node's tangential displacement relative to the moving shape while it is within
 // friction * (normal correction), else shortens it by that much. Records which nodes each
 // obstacle moved and the momentum m dx / dt it gave them.
-void apply_contacts(const Model& model, std::span<Vec3> x, double load_time, ContactStep& step);
+void apply_contacts(const Model& model, const Controls& controls, std::span<Vec3> x,
+                    double load_time, ContactStep& step);
 
 // Velocity stage (RATTLE-like) for the nodes the position stage moved: removes their
 // velocity into the shape relative to its own motion, and applies Coulomb friction to the
 // tangential part with the normal impulse as bound. Adds m dv to step.impulse.
-void apply_contact_velocities(const Model& model, std::span<const Vec3> x, std::span<Vec3> v,
-                              double load_time, ContactStep& step);
+void apply_contact_velocities(const Model& model, const Controls& controls, std::span<const Vec3> x,
+                              std::span<Vec3> v, double load_time, ContactStep& step);
 
 }  // namespace phymul

@@ -300,8 +300,8 @@ bool keep_factor(Workspace& w, int n, Square& a) {
 
 }  // namespace
 
-bool project_coupled_volumes(const Model& model, Workspace& w, std::span<Vec3> x, double load_time,
-                             std::span<Vec3> grad) {
+bool project_coupled_volumes(const Model& model, const Controls& controls, Workspace& w,
+                             std::span<Vec3> x, double load_time, std::span<Vec3> grad) {
   // Chord iterations on V_k(x0 + sum_j lambda_j d_j) = target_k with the Jacobian at x0,
   // G W G^T: exact to first order, so each iteration squares the relative error (1e-6 ->
   // 1e-12 -> round-off) and costs only the volumes, not their gradients.
@@ -328,7 +328,8 @@ bool project_coupled_volumes(const Model& model, Workspace& w, std::span<Vec3> x
     }
     return worst;
   };
-  for (int k = 0; k < n; ++k) targets[size_t(k)] = model.volumes[size_t(k)].target_at(load_time);
+  for (int k = 0; k < n; ++k)
+    targets[size_t(k)] = target_volume(model, controls, size_t(k), load_time);
   double worst = worst_error();
   if (!keep_factor(w, n, a)) return worst <= kExact;
   if (worst <= kExact) return true;

@@ -15,8 +15,8 @@ namespace phymul {
 // targets, when it cannot: more than kMaxJointVolumes constraints, directions not sized by
 // allocate_data, a surface that cannot change its volume, dependent gradients or no convergence.
 // The caller's Gauss-Seidel sweeps then finish (and report a stuck surface).
-bool project_coupled_volumes(const Model& model, Workspace& work, std::span<Vec3> x,
-                             double load_time, std::span<Vec3> grad);
+bool project_coupled_volumes(const Model& model, const Controls& controls, Workspace& work,
+                             std::span<Vec3> x, double load_time, std::span<Vec3> grad);
 
 // Takes out of v every volume's rate at once: solves (G W G^T) mu = G v and sets
 // v -= W G^T mu, after which every dV_k/dt is zero to round-off. Returns false (v untouched)

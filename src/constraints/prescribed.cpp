@@ -14,25 +14,26 @@ void apply_prescribed(const Model& model, std::span<Vec3> x, double load_time) {
   }
 }
 
-void apply_position_constraints(const Model& model, Workspace& work, std::span<Vec3> x,
-                                double load_time, std::span<Vec3> scratch) {
+void apply_position_constraints(const Model& model, const Controls& controls, Workspace& work,
+                                std::span<Vec3> x, double load_time, std::span<Vec3> scratch) {
   apply_prescribed(model, x, load_time);
   // Contact before volumes: the volume projection moves surface nodes by a few ulps of
   // their size only, while an obstacle may push a node by millimetres.
-  apply_contacts(model, x, load_time);
-  project_volumes(model, work, x, load_time, scratch);
+  apply_contacts(model, controls, x, load_time);
+  project_volumes(model, controls, work, x, load_time, scratch);
   // Doubled nodes last, so that they coincide exactly after every projection.
   project_doubled(model, x);
 }
 
-void apply_position_constraints(const Model& model, Workspace& work, std::span<Vec3> x,
-                                double load_time, std::span<Vec3> scratch, ContactStep& contact) {
+void apply_position_constraints(const Model& model, const Controls& controls, Workspace& work,
+                                std::span<Vec3> x, double load_time, std::span<Vec3> scratch,
+                                ContactStep& contact) {
   apply_prescribed(model, x, load_time);
-  apply_contacts(model, x, load_time, contact);
+  apply_contacts(model, controls, x, load_time, contact);
   if (!model.contact_pairs.empty())
     apply_deformable_contacts(model, x, work, *contact.pair_contacts, contact.dt,
                               contact.pair_impulse);
-  project_volumes(model, work, x, load_time, scratch, contact.x_start);
+  project_volumes(model, controls, work, x, load_time, scratch, contact.x_start);
   project_doubled(model, x);
 }
 

@@ -183,26 +183,30 @@ double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_m
   return project_volume_along(c, x, grad, target, relative_error_before);
 }
 
-void project_volumes(const Model& model, Workspace& work, std::span<Vec3> x, double load_time,
-                     std::span<Vec3> scratch, std::span<const Vec3> start) {
+void project_volumes(const Model& model, const Controls& controls, Workspace& work,
+                     std::span<Vec3> x, double load_time, std::span<Vec3> scratch,
+                     std::span<const Vec3> start) {
   // Surfaces sharing nodes: all multipliers at once (coupled_volume.hpp). Where that cannot
   // be used, each projection is exact for its own surface and they disturb each other, so
   // Gauss-Seidel sweeps go on until every volume was already at its target when its
   // projection began (the cubic's constant term is that volume: the check is free).
   constexpr double kConverged = 1e-12;  // relative: 100 times below the 1e-10 promised
   constexpr int kMaxSweeps = 500;
-  if (model.coupled_volumes && project_coupled_volumes(model, work, x, load_time, scratch)) return;
+  if (model.coupled_volumes &&
+      project_coupled_volumes(model, controls, work, x, load_time, scratch))
+    return;
   for (int sweep = 0; sweep < kMaxSweeps; ++sweep) {
     double worst = 0.0;
     for (size_t k = 0; k < model.volumes.size(); ++k) {
       const VolumeConstraint& c = model.volumes[k];
       const VolumeCache& cache = work.volumes[k];
       double before = 0.0;
+      const double target = target_volume(model, controls, k, load_time);
       if (!model.coupled_volumes && !start.empty() && gradient_kept_at(c, cache, start)) {
         kept_direction(c, cache, model.inverse_mass, scratch);
-        project_volume_along(c, x, scratch, c.target_at(load_time), &before);
+        project_volume_along(c, x, scratch, target, &before);
       } else {
-        project_volume(c, model.inverse_mass, x, scratch, c.target_at(load_time), &before);
+        project_volume(c, model.inverse_mass, x, scratch, target, &before);
       }
       worst = std::max(worst, before);
     }

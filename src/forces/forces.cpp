@@ -27,7 +27,10 @@ void compute_forces(const Model& model, Data& s, double load_time) {
     const Vec3 fi = load.force.at(load_time);
     for (int i : load.nodes) s.f[i] += fi;
   }
-  for (const PressureLoad& load : model.pressures) add_pressure_forces(load, s.x, s.f, load_time);
+  for (size_t k = 0; k < model.pressures.size(); ++k)
+    add_pressure(model.pressures[k], s.controls.pressure[k].at(load_time).x(), s.x, s.f);
+  if (!s.controls.applied_force.empty())
+    for (int i = 0; i < n; ++i) s.f[size_t(i)] += s.controls.applied_force[size_t(i)];
   s.shape_memory_energy = 0.0;
   size_t first_rotation = 0;
   for (size_t k = 0; k < model.shape_memory.size(); ++k) {

@@ -8,7 +8,10 @@ namespace phymul {
 
 void add_pressure_forces(const PressureLoad& load, std::span<const Vec3> x, std::span<Vec3> f,
                          double load_time) {
-  const double p = load.pressure.at(load_time).x();
+  add_pressure(load, load.pressure.at(load_time).x(), x, f);
+}
+
+void add_pressure(const PressureLoad& load, double p, std::span<const Vec3> x, std::span<Vec3> f) {
   if (p == 0.0) return;
   for (const Triangle& t : load.faces) {
     // (b - a) x (c - a) is twice the area vector: each node takes a third of p * area.

@@ -11,5 +11,7 @@ namespace phymul {
 // normal of the current triangle) / 3 on each of its nodes. Allocates nothing.
 void add_pressure_forces(const PressureLoad& load, std::span<const Vec3> x, std::span<Vec3> f,
                          double load_time);
+// The same with the pressure p (Pa) given.
+void add_pressure(const PressureLoad& load, double p, std::span<const Vec3> x, std::span<Vec3> f);
 
 }  // namespace phymul

@@ -108,26 +108,29 @@ void add_obstacle(Mesh& mesh, const RigidObstacle& o, const Vec3& base, const Ve
 
 }  // namespace
 
-Mesh obstacle_surfaces(std::span<const RigidObstacle> obstacles, double load_time, const Vec3& lo,
-                       const Vec3& hi, std::vector<int>& cell_obstacle) {
+Mesh obstacle_surfaces(std::span<const RigidObstacle> obstacles, std::span<const Schedule> motions,
+                       double load_time, const Vec3& lo, const Vec3& hi,
+                       std::vector<int>& cell_obstacle) {
   Mesh mesh;
   cell_obstacle.clear();
   const Vec3 centre = 0.5 * (lo + hi);
   const double diagonal = std::max((hi - lo).norm(), 1e-3);
   for (size_t k = 0; k < obstacles.size(); ++k) {
     const RigidObstacle& o = obstacles[k];
-    add_obstacle(mesh, o, o.point + o.motion.at(load_time), centre, diagonal);
+    const Schedule& motion = motions.empty() ? o.motion : motions[k];
+    add_obstacle(mesh, o, o.point + motion.at(load_time), centre, diagonal);
     cell_obstacle.resize(mesh.cells.size(), int(k));
   }
   return mesh;
 }
 
 void write_obstacle_surfaces(const std::filesystem::path& path,
-                             std::span<const RigidObstacle> obstacles, double load_time,
+                             std::span<const RigidObstacle> obstacles,
+                             std::span<const Schedule> motions, double load_time,
                              std::span<const Vec3> x, VtuEncoding encoding) {
   const auto [lo, hi] = bounding_box(x);
   std::vector<int> owner;
-  const Mesh surfaces = obstacle_surfaces(obstacles, load_time, lo, hi, owner);
+  const Mesh surfaces = obstacle_surfaces(obstacles, motions, load_time, lo, hi, owner);
   const CellField cells[] = {{"obstacle", owner}};
   write_vtu(path, surfaces.points, surfaces.cells, {}, cells, encoding);
 }

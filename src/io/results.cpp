@@ -114,7 +114,7 @@ std::string obstacle_frame_name(const std::string& stem, size_t frame) {
 void ResultWriter::write_obstacles(const Model& m, const Data& s, int frame) {
   if (!has_obstacles_) return;
   write_obstacle_surfaces(dir_ / obstacle_frame_name(stem_, size_t(frame)), m.obstacles,
-                          s.load_time, s.x, encoding_);
+                          s.controls.obstacle_motion, s.load_time, s.x, encoding_);
 }
 
 // The obstacles' frames are named after the body's, at the same times, so their list

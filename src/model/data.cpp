@@ -40,6 +40,17 @@ void init_bodies(const Model& model, Data& d) {
   }
 }
 
+// The model's schedules, as the controls start.
+void init_controls(const Model& model, Controls& c) {
+  for (const RigidObstacle& o : model.obstacles) c.obstacle_motion.push_back(o.motion);
+  for (const PressureLoad& p : model.pressures) c.pressure.push_back(p.pressure);
+  for (const VolumeConstraint& v : model.volumes) c.target_volume.push_back(v.target_schedule);
+  for (const RigidBody& b : model.rigid_bodies) {
+    c.body_translation.push_back(b.translation);
+    c.body_rotation.push_back(b.rotation);
+  }
+}
+
 // Every buffer a step uses, at its size: a step allocates nothing.
 void allocate_workspace(const Model& model, Workspace& w) {
   const size_t n = model.rest_position.size();
@@ -89,13 +100,30 @@ void compare_shape(const T& made, const T& got, const std::string& path, std::st
                              list ? "allows at most" : "has", list ? made.capacity() : made.size());
       return;
     }
-    if constexpr (fields::is_vector<typename T::value_type>)
+    if constexpr (fields::is_vector<typename T::value_type> ||
+                  std::is_same_v<typename T::value_type, Schedule>)
       for (size_t k = 0; k < made.size(); ++k)
         compare_shape(made[k], got[k], fmt::format("{}[{}]", path, k), mismatch);
+  } else if constexpr (std::is_same_v<T, Schedule>) {
+    if (got.times.size() != got.values.size())
+      mismatch =
+          fmt::format("'{}' has {} times and {} values", path, got.times.size(), got.values.size());
+  } else if constexpr (std::is_same_v<T, Controls>) {
+    fields::for_each_pair(made, got, [&](std::string_view name, const auto& a, const auto& b) {
+      if (name == "applied_force") return;  // checked with Data's node count below
+      compare_shape(a, b, path + "." + std::string(name), mismatch);
+    });
   } else if constexpr (std::is_same_v<T, Data>) {
     fields::for_each_pair(made, got, [&](std::string_view name, const auto& a, const auto& b) {
       compare_shape(a, b, path + "." + std::string(name), mismatch);
     });
+    // Applied forces: none, or one per node.
+    const size_t forces = got.controls.applied_force.size();
+    if (mismatch.empty() && forces != 0 && forces != got.x.size())
+      mismatch = fmt::format(
+          "'{}.controls.applied_force' has {} entries where the model has {} "
+          "nodes (or none)",
+          path, forces, got.x.size());
   }
 }
 
@@ -132,6 +160,7 @@ Data allocate_data(const Model& model) {
   d.pair_contact_force.assign(model.contact_pairs.size(), Vec3::Zero());
   if (!model.obstacles.empty()) d.obstacle_touching.assign(n, -1);
   d.pair_contacts.reserve(pair_contact_capacity(model));
+  init_controls(model, d.controls);
   allocate_workspace(model, *d.work);
   return d;
 }

@@ -28,6 +28,17 @@ struct FieldNames<StaticProgress> {
 };
 
 template <>
+struct FieldNames<Schedule> {
+  static constexpr const char* names[] = {"times", "values"};
+};
+
+template <>
+struct FieldNames<Controls> {
+  static constexpr const char* names[] = {"applied_force", "obstacle_motion",  "pressure",
+                                          "target_volume", "body_translation", "body_rotation"};
+};
+
+template <>
 struct FieldNames<Data> {
   static constexpr const char* names[] = {"time",
                                           "step",
@@ -45,6 +56,7 @@ struct FieldNames<Data> {
                                           "stable_dt",
                                           "load_time",
                                           "static_progress",
+                                          "controls",
                                           "work"};
 };
 

@@ -67,8 +67,11 @@ void drift_rigid_bodies(const Model& model, Data& state, double h, double load_t
     const RigidBody& r = model.rigid_bodies[b];
     RigidBodyState& s = state.bodies[b];
     if (r.driven) {
-      s.center = r.rest_center + r.translation.at(load_time);
-      s.orientation = (rotation_vector(r.rotation.at(load_time)) * r.rest_orientation).normalized();
+      const Controls& c = state.controls;
+      s.center = r.rest_center + c.body_translation[size_t(b)].at(load_time);
+      s.orientation =
+          (rotation_vector(c.body_rotation[size_t(b)].at(load_time)) * r.rest_orientation)
+              .normalized();
       const Eigen::Matrix3d R = s.orientation.toRotationMatrix();
       for (size_t k = 0; k < r.nodes.size(); ++k) {
         const Vec3 x = s.center + R * r.offset[k];

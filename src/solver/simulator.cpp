@@ -42,7 +42,8 @@ Data make_data(const Model& model) {
           : stable_time_step(model, scaled ? model.inertia : model.mass);
   d.dt = s.dt ? *s.dt : s.dt_safety * d.stable_dt;
   if (!std::isfinite(d.dt)) d.dt = 1e-3;  // no stiffness at all: any step is stable
-  apply_position_constraints(model, *d.work, d.x, 0.0, d.work->f_start);  // free between steps
+  apply_position_constraints(model, d.controls, *d.work, d.x, 0.0,
+                             d.work->f_start);  // free between steps
   compute_forces(model, d, 0.0);
   release_free_memory();
   return d;

@@ -71,8 +71,10 @@ void find_obstacle_contacts(const Model& model, Data& d) {
   std::vector<ObstacleContact>& contacts = d.work->contacts;
   contacts.clear();
   for (const RigidObstacle& o : model.obstacles) {
+    // The obstacle where the controls put it: its own motion unless a program moved it.
+    const Schedule& motion = d.controls.obstacle_motion[size_t(&o - model.obstacles.data())];
     auto add = [&](int i) {
-      const SurfaceDistance distance = obstacle_distance(o, d.x[i], d.load_time);
+      const SurfaceDistance distance = obstacle_distance(o, motion, d.x[i], d.load_time);
       const bool moved = d.obstacle_touching[size_t(i)] == int(&o - model.obstacles.data());
       if (std::abs(distance.distance) > kTouching && !moved) return;
       contacts.push_back({i, o.keep_inside ? Vec3(-distance.normal) : distance.normal, o.friction});
@@ -258,7 +260,7 @@ StaticResult relax(const Model& model, Data& d, double load_time, long max_itera
   d.static_progress.fire_alpha = StaticProgress{}.fire_alpha;
   d.static_progress.fire_downhill = 0;
   drift_rigid_bodies(model, d, 0.0, load_time);  // driven bodies at their new pose
-  apply_position_constraints(model, *d.work, d.x, load_time,
+  apply_position_constraints(model, d.controls, *d.work, d.x, load_time,
                              d.work->f_start);  // free between steps
   compute_forces(model, d, load_time);
   d.load_time = load_time;

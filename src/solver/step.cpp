@@ -333,13 +333,14 @@ void step_verlet(const Model& model, Data& d, double h, double load_time) {
   drift(model, d, h);  // the first half kick too
   drift_rigid_bodies(model, s, h, load_time);
   ContactStep contact = begin_contact_step(d, h);
-  apply_position_constraints(model, work, s.x, load_time, work.f_start, contact);  // a is spent
+  apply_position_constraints(model, s.controls, work, s.x, load_time, work.f_start,
+                             contact);  // a is spent
   // The forces read the positions only: the velocities can wait for the half kick.
   compute_forces(model, s, load_time);
   d.load_time = load_time;
   // The velocity projection below is linear: projecting the sum makes the kick tangent too.
   half_kick_from_positions(model, d, h);
-  apply_contact_velocities(model, s.x, s.v, load_time, contact);
+  apply_contact_velocities(model, s.controls, s.x, s.v, load_time, contact);
   project_volume_velocities(model, work, s.x, s.v, work.f_start);  // a is spent
   project_doubled(model, s.v);
   kick_rigid_bodies(model, s, h);
@@ -374,9 +375,10 @@ void step_newton_cotes(const Model& model, Data& d, double h, double load_time) 
   }
   place_rigid_nodes(model, s);
   ContactStep contact = begin_contact_step(d, h);
-  apply_position_constraints(model, work, s.x, load_time, work.f_start, contact);  // a0 is spent
+  apply_position_constraints(model, s.controls, work, s.x, load_time, work.f_start,
+                             contact);  // a0 is spent
   for (int i = 0; i < n; ++i) s.v[i] += (s.x[i] - work.a1[i]) / h;
-  apply_contact_velocities(model, s.x, s.v, load_time, contact);
+  apply_contact_velocities(model, s.controls, s.x, s.v, load_time, contact);
   project_volume_velocities(model, work, s.x, s.v, work.f_start);
   project_doubled(model, s.v);
   end_contact_step(d, h);

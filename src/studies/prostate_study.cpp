@@ -109,7 +109,7 @@ StaticResult relax_to(Simulator& sim, double load_time) {
 void write_obstacles(const std::filesystem::path& dir, const std::string& name, const Model& model,
                      const Frames& frames) {
   for (size_t k = 0; k < frames.size() && !model.obstacles.empty(); ++k)
-    write_obstacle_surfaces(dir / fmt::format("{}_obstacles_{}.vtu", name, k), model.obstacles,
+    write_obstacle_surfaces(dir / fmt::format("{}_obstacles_{}.vtu", name, k), model.obstacles, {},
                             frames[k].time, frames[k].x);
 }
 

@@ -66,7 +66,7 @@ TEST(JointVolumes, OneProjectionHoldsEveryVolumeWhereGaussSeidelNeedsManySweeps)
     }
     std::vector<Vec3> joint = start;
     Data data = allocate_data(m);
-    project_volumes(m, *data.work, joint, 0.0, scratch);
+    project_volumes(m, data.controls, *data.work, joint, 0.0, scratch);
     double moved = 0.0, apart = 0.0;
     for (int i = 0; i < m.node_count(); ++i) {
       moved = std::max(moved, (joint[i] - start[i]).norm());
@@ -110,7 +110,7 @@ TEST(JointVolumes, TheChordLandsWithTheGradientsTheVelocityProjectionReuses) {
     const double start = worst_relative_error(m, x);
     Data data = allocate_data(m);
     Workspace& work = *data.work;
-    ASSERT_TRUE(project_coupled_volumes(m, work, x, 0.0, grad));
+    ASSERT_TRUE(project_coupled_volumes(m, data.controls, work, x, 0.0, grad));
     bool kept = work.joint.factor_valid;  // what the velocity projection asks before reusing
     for (size_t k = 0; k < m.volumes.size(); ++k)
       kept = kept && gradient_kept_at(m.volumes[k], work.volumes[k], x);

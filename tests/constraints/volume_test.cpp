@@ -54,7 +54,7 @@ TEST(VolumeConstraint, HeldAxesAreNotMoved) {
   std::vector<Vec3> x = model.rest_position;
   std::vector<Vec3> grad(x.size());
   Data data = allocate_data(model);
-  apply_position_constraints(model, *data.work, x, 0.0, grad);
+  apply_position_constraints(model, data.controls, *data.work, x, 0.0, grad);
   for (int i = 0; i < model.node_count(); ++i)
     EXPECT_EQ(x[i].z(), model.rest_position[i].z() - 0.004);
   // A pure translation keeps the volume: the constraint must leave it as it is.

@@ -38,7 +38,7 @@ TEST(VolumeThreads, ProjectionsGiveBitIdenticalResultsOnOneAndTwoThreads) {
     omp_set_num_threads(threads);
     std::vector<Vec3> x = x0, v = v0, scratch(x0.size());
     Data data = allocate_data(model);
-    project_volumes(model, *data.work, x, 0.0, scratch);
+    project_volumes(model, data.controls, *data.work, x, 0.0, scratch);
     project_volume_velocities(model, *data.work, x, v, scratch);
     xs.push_back(x);
     vs.push_back(v);

@@ -32,7 +32,7 @@ TEST(ObstacleSurface, VerticesLieOnTheShapesAndTrianglesFaceOutwards) {
   const double t = 0.5;  // half way along the motion
   std::vector<int> owner;
   const Mesh mesh =
-      obstacle_surfaces(obstacles, t, Vec3(-0.02, -0.02, 0.0), Vec3(0.02, 0.02, 0.03), owner);
+      obstacle_surfaces(obstacles, {}, t, Vec3(-0.02, -0.02, 0.0), Vec3(0.02, 0.02, 0.03), owner);
   ASSERT_EQ(owner.size(), mesh.cells.size());
   std::vector<int> triangles(obstacles.size(), 0);
   for (size_t c = 0; c < mesh.cells.size(); ++c) {
