@@ -3,6 +3,7 @@
 #include <benchmark/benchmark.h>
 
 #include "phymul/calibration.hpp"
+#include "phymul/installation.hpp"
 #include "phymul/studies/truthcube.hpp"
 
 namespace {
@@ -12,7 +13,8 @@ using namespace phymul;
 // Everything `phymul truthcube` computes for its table, files and pictures aside (the shape
 // memory's plate force includes its K calibration).
 void BM_TruthCubeTable(benchmark::State& state) {
-  const auto beads = truthcube::load_beads(PHYMUL_TRUTHCUBE_DATA);
+  const auto beads =
+      truthcube::load_beads(share_directory() / "data" / "truthcube" / "uniaxial_positions.csv");
   truthcube::StudyOptions o;
   o.cells = int(state.range(0));
   for (auto _ : state) {

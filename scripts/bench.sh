@@ -31,3 +31,7 @@ OMP_NUM_THREADS=1 "$root/$build/bench/phymul_frame_bench" \
   --benchmark_out="$root/bench/results_frame.json" --benchmark_out_format=json \
   --benchmark_counters_tabular=true --benchmark_repetitions=5 --benchmark_enable_random_interleaving=true
 "$root/$build/bench/phymul_memory" 40 | tee "$root/bench/memory.json"
+# The Python module: phymul.step's cost per call over the C++ step, and two threads stepping
+# two models at once (bench/results_python.json).
+PYTHONPATH="$root/$build/python" /usr/bin/python3 "$root/bench/python_bench.py" \
+  "$root/bench/results_python.json"

@@ -55,7 +55,11 @@ def python_module(prefix, scene, points, env, sanitized):
 def main():
     build, source, work = map(pathlib.Path, sys.argv[1:4])
     # A sanitized build's runtime records source paths (it is for tests, never installed).
-    sanitized = "--sanitized" in sys.argv[4:]
+    # --sanitized=COMPILER: the embedding program is built by that compiler with the
+    # sanitizers' runtime, as the library was.
+    sanitizer_compiler = next((a.split("=", 1)[1] for a in sys.argv[4:]
+                               if a.startswith("--sanitized=")), None)
+    sanitized = sanitizer_compiler is not None
     shutil.rmtree(work, ignore_errors=True)
     prefix = work / "prefix"
     run("cmake", "--install", build, "--prefix", prefix)
@@ -73,8 +77,10 @@ def main():
             sys.exit(f"{path.relative_to(prefix)} holds the source tree's path {needle.decode()}")
 
     embed = work / "embed"
+    flags = [f"-DCMAKE_CXX_COMPILER={sanitizer_compiler}",
+             "-DCMAKE_EXE_LINKER_FLAGS=-fsanitize=address,undefined"] if sanitized else []
     run("cmake", "-S", source / "examples" / "embed", "-B", embed,
-        f"-DCMAKE_PREFIX_PATH={prefix}", "-DCMAKE_BUILD_TYPE=Release")
+        f"-DCMAKE_PREFIX_PATH={prefix}", "-DCMAKE_BUILD_TYPE=Release", *flags)
     run("cmake", "--build", embed)
 
     scene = source / "examples" / "hanging_cube.yaml"
