@@ -70,6 +70,16 @@ def threads(repeats=5):
     return statistics.median(ratios)
 
 
+def cpu_model():
+    try:
+        for line in pathlib.Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.machine()
+
+
 def main():
     out = pathlib.Path(sys.argv[1]) if len(sys.argv) > 1 else ROOT / "bench" / "results_python.json"
     call_us, step_us, nodes = overhead()
@@ -81,7 +91,7 @@ def main():
         "step_us": step_us,
         "step_overhead_us": call_us,
         "two_thread_speedup": speedup,
-        "machine": platform.processor() or platform.machine(),
+        "machine": cpu_model(),
         "cpus": os.cpu_count(),
         "python": platform.python_version(),
     }
