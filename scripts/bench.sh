@@ -35,3 +35,7 @@ OMP_NUM_THREADS=1 "$root/$build/bench/phymul_frame_bench" \
 # two models at once (bench/results_python.json).
 PYTHONPATH="$root/$build/python" /usr/bin/python3 "$root/bench/python_bench.py" \
   "$root/bench/results_python.json"
+# Parameter sweeps on Dask: 20 small samples on one local worker, then two; the overhead per
+# sample beyond its run (bench/results_sweep.json).
+PYTHONPATH="$root/$build/python" /usr/bin/python3 "$root/bench/sweep_bench.py" \
+  "$root/bench/results_sweep.json"

@@ -19,6 +19,7 @@ RANK = {"mesh": 0, "fem": 1, "model": 2, "forces": 3, "constraints": 3, "solver"
 PUBLIC = {
     "phymul.hpp": "io",  # the umbrella header: the library, studies aside
     "mesh.hpp": "mesh",
+    "meshing.hpp": "mesh",
     "schedule.hpp": "mesh",
     "fem.hpp": "fem",
     "scene.hpp": "model",

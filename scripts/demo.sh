@@ -23,6 +23,13 @@ echo "== truthcube (the paper's section 3: beads measured in a compressed silico
 "$root/$build/phymul" truthcube -o "$results/truthcube"
 echo "== prostate (the paper's section 4: an endorectal probe, bladder empty to full)"
 "$root/$build/phymul" prostate -o "$results/prostate"
+# Parameter sweeps on a local Dask cluster (docs/scale-out.md), each in a fresh directory.
+for sweep in "$root"/examples/sweeps/*.yaml; do
+  name=$(basename "$sweep" .yaml)
+  echo "== sweep $name"
+  rm -rf "$results/sweeps/$name"
+  "$root/$build/phymul" sweep "$sweep" -o "$results/sweeps/$name"
+done
 echo
 echo "Results are in $results/<example>/:"
 echo "  <example>.png            the last frame, coloured by displacement (rest shape in grey)"
@@ -35,3 +42,6 @@ echo "and the prostate study in $results/prostate/: prostate_deformation.png (de
 echo "centre displacement and probe force against filling), prostate_empty.png, prostate_full.png"
 echo "(pressure probe), prostate_empty_rigid.png, prostate_full_rigid.png (rigid probe, drawn),"
 echo "prostate.json, one scene (.yaml) and .pvd series per filling and probe, real_time/<run>/report.json"
+echo "and the sweeps in $results/sweeps/<sweep>/: results.csv (a row per sample), summary.png"
+echo "(prostate_sensitivity: the prostate's deformation against its stiffness, a curve per"
+echo "bladder filling, a panel per probe force), samples/<id>/ (each sample's scene and results)"

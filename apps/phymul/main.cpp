@@ -8,12 +8,14 @@
 #include <iostream>
 
 #include "calibrate_command.hpp"
+#include "mesh_command.hpp"
 #include "phymul/model.hpp"
 #include "phymul/run.hpp"
 #include "phymul/scene.hpp"
 #include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
 #include "prostate_command.hpp"
+#include "sweep_command.hpp"
 #include "truthcube_command.hpp"
 
 namespace {
@@ -46,6 +48,8 @@ int check(const std::string& file) {
   try {
     const phymul::Scene scene = phymul::load_scene(file);
     const phymul::Model model = phymul::compile_scene(scene);
+    for (const phymul::ObjectSpec& o : scene.objects)  // what reading a surface repaired
+      for (const std::string& note : o.mesh.file_notes) std::cout << "  " << note << '\n';
     print_stiffness_calibrations(model.stiffness_calibrations);
     if (scene.simulation.solver == phymul::StaticSolver::newton) {  // no time step to speak of
       std::cout << fmt::format("{}: ok ({} objects, {} nodes, {} cells; static, Newton)\n", file,
@@ -170,6 +174,8 @@ int main(int argc, char** argv) {
   const auto truthcube = phymul::cli::add_truthcube_command(app);
   const auto calibrate = phymul::cli::add_calibrate_command(app);
   const auto prostate = phymul::cli::add_prostate_command(app);
+  const auto sweep = phymul::cli::add_sweep_command(app);
+  const auto mesh = phymul::cli::add_mesh_command(app);
 
   // CLI11 alone reports an unknown command as "A subcommand is required": name it instead.
   if (argc > 1 && argv[1][0] != '-') {
@@ -199,6 +205,8 @@ int main(int argc, char** argv) {
     if (*truthcube.app) return truthcube.run();
     if (*calibrate.app) return calibrate.run();
     if (*prostate.app) return prostate.run();
+    if (*sweep.app) return sweep.run();
+    if (*mesh.app) return mesh.run();
     std::cout << phymul::scene_reference_markdown();
     return 0;
   } catch (const std::exception& e) {

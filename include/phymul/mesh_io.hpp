@@ -1,12 +1,14 @@
-// Meshes read from files: legacy VTK ASCII unstructured grids (.vtk, versions up to 5.1) and
-// Gmsh ASCII (.msh, versions 4.1 and 2.2). Every problem names the file, line and column,
-// what was expected and what was found.
+// Meshes read from files: legacy VTK ASCII unstructured grids (.vtk, versions up to 5.1),
+// Gmsh ASCII (.msh, versions 4.1 and 2.2) and closed surfaces (.stl, .obj, .ply). Every
+// problem names the file, its line and column where it has lines, what was expected and what
+// was found.
 #pragma once
 
 #include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "phymul/mesh.hpp"
 
@@ -28,10 +30,24 @@ class MeshFileError : public std::runtime_error {
 // the cells of the highest dimension are the mesh and the lower ones (boundary triangles,
 // lines, points) only define node sets. Gmsh physical groups become node sets named as in
 // $PhysicalNames ("physical_<tag>" without a name). Points that no cell uses are refused.
-Mesh read_mesh_file(const std::filesystem::path& path, double divisor = 1.0);
+//
+// Closed surfaces (an organ's boundary, as segmentation tools write them): STL (ASCII or
+// binary), OBJ (polygons split into triangles from their first vertex), PLY (ASCII or binary,
+// either byte order). Points with the same coordinates are merged; the surface must be
+// closed, manifold, orientable, free of degenerate and crossing triangles (a MeshFileError
+// names the edges or triangles otherwise); its orientation is made consistent and outward.
+// What was repaired is appended to `notes`.
+Mesh read_mesh_file(const std::filesystem::path& path, double divisor = 1.0,
+                    std::vector<std::string>* notes = nullptr);
 
 // The same, from text; `name` is used in messages.
 Mesh parse_vtk_mesh(std::string_view text, const std::string& name, double divisor = 1.0);
 Mesh parse_gmsh_mesh(std::string_view text, const std::string& name, double divisor = 1.0);
+Mesh parse_stl_mesh(std::string_view bytes, const std::string& name, double divisor = 1.0,
+                    std::vector<std::string>* notes = nullptr);
+Mesh parse_obj_mesh(std::string_view text, const std::string& name, double divisor = 1.0,
+                    std::vector<std::string>* notes = nullptr);
+Mesh parse_ply_mesh(std::string_view bytes, const std::string& name, double divisor = 1.0,
+                    std::vector<std::string>* notes = nullptr);
 
 }  // namespace phymul

@@ -88,9 +88,12 @@ struct MeshSpec {
   Eigen::Vector3d center = Eigen::Vector3d::Zero();  // m
   std::string file;                                  // instead of a generator
   std::string units = "m";                           // of the file's coordinates
+  bool fill_tetra = false;                           // a closed surface file filled with tetrahedra
+  std::optional<double> fill_edge;  // m, their largest edge inside (with fill_tetra)
   // The mesh of `file` in metres, as the loader read it (scene_io.hpp): compiling reads no
   // file.
   std::shared_ptr<const Mesh> file_mesh;
+  std::vector<std::string> file_notes;  // what reading it repaired (merged points, orientation)
   SourceLoc loc;
 };
 

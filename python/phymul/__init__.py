@@ -36,11 +36,13 @@ from ._phymul import (  # noqa: F401
     forward,
     kinetic_energy,
     load_scene,
+    read_mesh,
     scene_field,
     solve_static,
     step,
 )
 from . import _phymul
+from .sweep import sweep  # noqa: F401 - parameter sweeps on Dask (docs/scale-out.md)
 
 _DATA = _pathlib.Path(__file__).resolve().parent / "data"
 

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "bindings.hpp"
+#include "phymul/mesh_io.hpp"
 #include "phymul/results.hpp"
 #include "phymul/run.hpp"
 #include "phymul/scene_io.hpp"
@@ -111,9 +112,42 @@ std::string prostate_json(const std::vector<double>& fillings,
   return prostate::json(prostate::run_study(options, out));
 }
 
+// A mesh file as arrays: points (m), each cell type's node lists, and what reading repaired.
+py::dict read_mesh(const std::string& path, double divisor) {
+  if (!(divisor > 0.0) || !std::isfinite(divisor))
+    throw py::value_error("divisor must be > 0 (1000 for a file in millimetres)");
+  std::vector<std::string> notes;
+  const Mesh mesh = read_mesh_file(path, divisor, &notes);
+  py::array_t<double> points({py::ssize_t(mesh.points.size()), py::ssize_t(3)});
+  auto p = points.mutable_unchecked<2>();
+  for (size_t i = 0; i < mesh.points.size(); ++i)
+    for (int a = 0; a < 3; ++a) p(py::ssize_t(i), a) = mesh.points[i][a];
+  std::map<std::string, std::vector<int>> flat;
+  for (const Cell& c : mesh.cells)
+    for (int i : c.node_span()) flat[cell_type_name(c.type)].push_back(i);
+  py::dict cells;
+  for (const Cell& c : mesh.cells) {
+    const std::string type = cell_type_name(c.type);
+    if (cells.contains(type)) continue;
+    const std::vector<int>& nodes = flat[type];
+    const py::ssize_t n = node_count(c.type);
+    py::array_t<int> a({py::ssize_t(nodes.size()) / n, n});
+    std::copy(nodes.begin(), nodes.end(), a.mutable_data());
+    cells[py::str(type)] = a;
+  }
+  py::dict out;
+  out["points"] = points;
+  out["cells"] = cells;
+  out["notes"] = notes;
+  return out;
+}
+
 }  // namespace
 
 void bind_run(py::module_& m) {
+  m.def("read_mesh", &read_mesh, py::arg("path"), py::arg("divisor") = 1.0,
+        "A mesh file (.vtk, .msh, .stl, .obj, .ply) as {points, cells: {type: nodes}, notes}; "
+        "coordinates divided by `divisor` (1000 for millimetres).");
   m.def("_run", &run, py::arg("scene"), py::arg("out"), py::arg("progress") = false,
         py::arg("checkpoint_every") = "", py::arg("resume") = false);
   py::class_<Writer>(m, "ResultWriter",

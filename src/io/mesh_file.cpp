@@ -1,4 +1,5 @@
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <cctype>
 #include <charconv>
@@ -7,6 +8,7 @@
 #include <sstream>
 
 #include "io/mesh_text.hpp"
+#include "mesh/surface_check.hpp"
 #include "phymul/mesh_io.hpp"
 
 namespace phymul {
@@ -142,9 +144,28 @@ void check_points_used(const Mesh& mesh, const std::vector<Token>& point_at, con
                                           i));
 }
 
+Mesh finish_surface(Mesh mesh, const std::string& name, std::vector<std::string>* notes) {
+  if (mesh.cells.empty()) throw MeshFileError(name, 0, 0, "the file holds no triangle");
+  const size_t merged = merge_duplicate_points(mesh);
+  SurfaceCheck check = check_closed_surface(mesh);
+  if (!check.problems.empty())
+    throw MeshFileError(name, 0, 0,
+                        fmt::format("{}{}", fmt::join(check.problems, "; "),
+                                    check.problems.size() >= 10 ? " (and maybe more)" : ""));
+  if (notes) {
+    if (merged > 0)
+      notes->push_back(fmt::format("{}: {} repeated vertices merged ({} points left)", name, merged,
+                                   mesh.points.size()));
+    for (const std::string& repair : check.repairs)
+      notes->push_back(fmt::format("{}: {}", name, repair));
+  }
+  return mesh;
+}
+
 }  // namespace mesh_io
 
-Mesh read_mesh_file(const std::filesystem::path& path, double divisor) {
+Mesh read_mesh_file(const std::filesystem::path& path, double divisor,
+                    std::vector<std::string>* notes) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw MeshFileError(path.string(), 0, 0, "cannot open the mesh file");
   std::ostringstream s;
@@ -153,9 +174,13 @@ Mesh read_mesh_file(const std::filesystem::path& path, double divisor) {
   const std::string ext = path.extension().string();
   if (ext == ".vtk") return parse_vtk_mesh(text, path.string(), divisor);
   if (ext == ".msh") return parse_gmsh_mesh(text, path.string(), divisor);
+  if (ext == ".stl") return parse_stl_mesh(text, path.string(), divisor, notes);
+  if (ext == ".obj") return parse_obj_mesh(text, path.string(), divisor, notes);
+  if (ext == ".ply") return parse_ply_mesh(text, path.string(), divisor, notes);
   throw MeshFileError(path.string(), 0, 0,
-                      fmt::format("unknown mesh file type '{}': expected .vtk (legacy VTK ASCII) "
-                                  "or .msh (Gmsh ASCII 4.1 or 2.2)",
+                      fmt::format("unknown mesh file type '{}': expected .vtk (legacy VTK ASCII), "
+                                  ".msh (Gmsh ASCII 4.1 or 2.2), or a closed surface: .stl "
+                                  "(ASCII or binary), .obj, .ply (ASCII or binary)",
                                   ext));
 }
 

@@ -53,6 +53,12 @@ class Lexer {
 // Refuses NUL and other control bytes (binary files, garbage) at their line and column.
 void check_text(std::string_view text, const std::string& name);
 
+// A surface read from STL, OBJ or PLY made ready for use: points with the same coordinates
+// merged, then checked as a closed surface and its orientation repaired
+// (mesh/surface_check.hpp). Its problems are a MeshFileError; what was repaired is appended
+// to `notes` (when given) as sentences naming the file.
+Mesh finish_surface(Mesh mesh, const std::string& name, std::vector<std::string>* notes);
+
 // The finished mesh's checks that the readers share: every point used by some cell.
 void check_points_used(const Mesh& mesh, const std::vector<Token>& point_at, const Lexer& lexer);
 

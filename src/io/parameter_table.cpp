@@ -31,6 +31,7 @@ const Condition kVolumeKept{"volume_constraint", {"true"}};
 const Condition kAxisShape{"shape", {"plane", "capsule", "probe"}};
 const Condition kRoundShape{"shape", {"sphere", "capsule", "probe"}};
 const Condition kCapsule{"shape", {"capsule"}};
+const Condition kFill{"fill", {"tetra"}};
 
 const std::vector<Section>& sections() {
   static const std::vector<Section> table{
@@ -334,13 +335,29 @@ std::vector<Parameter> mesh_parameters() {
        .doc = "A mesh file, relative to the scene file: legacy VTK ASCII unstructured grid "
               "(`.vtk`; triangle, quad, tetra, hexahedron, wedge cells) or Gmsh ASCII 4.1 or "
               "2.2 (`.msh`; the highest-dimension elements are the cells, physical groups become "
-              "node sets). All volume or all surface cells."},
+              "node sets). All volume or all surface cells. Or a closed surface: STL (ASCII or "
+              "binary), OBJ or PLY (ASCII or binary), checked closed, manifold and free of "
+              "crossing triangles, its orientation made outward."},
       {.section = "mesh",
        .name = "units",
        .kind = Kind::choice,
        .choices = {"m", "cm", "mm", "um"},
        .default_value = "m",
        .doc = "Length unit of the coordinates in `file`."},
+      {.section = "mesh",
+       .name = "fill",
+       .kind = Kind::choice,
+       .choices = {"tetra"},
+       .doc = "A closed surface read from `file` filled with tetrahedra (Gmsh's Delaunay "
+              "mesher), its triangles kept as the boundary: the object is volumetric. Absent: "
+              "the surface is the object."},
+      {.section = "mesh",
+       .name = "edge",
+       .kind = Kind::quantity,
+       .dimension = Dimension::length,
+       .range = gt(0),
+       .when = {kFill},
+       .doc = "With `fill` (required there): the largest edge of the tetrahedra inside."},
       {.section = "mesh",
        .name = "element",
        .kind = Kind::choice,

@@ -407,6 +407,14 @@ MeshSpec SceneBuilder::mesh(SectionReader& reader) {
   reader.read("center", spec.center);
   reader.read("file", spec.file);
   reader.read("units", spec.units);
+  spec.fill_tetra = reader.value_loc("fill").has_value();
+  std::string fill;
+  reader.read("fill", fill);
+  double edge = 0.0;
+  if (reader.read("edge", edge)) spec.fill_edge = edge;
+  if (spec.fill_tetra && !reader.value_loc("edge"))
+    context_.error(*reader.value_loc("fill"),
+                   "'fill' needs 'edge', the largest edge of the tetrahedra (a length)");
   check_mesh_source(reader);
   reader.done();
   return spec;
@@ -417,7 +425,8 @@ void SceneBuilder::check_mesh_source(SectionReader& reader) {
   const bool from_file = reader.value_loc("file").has_value();
   for (const io::Parameter* p : io::section_parameters("mesh")) {
     if (p->name == "generator") continue;  // the one_of check names both
-    const bool generator_key = p->name != "file" && p->name != "units";
+    const bool generator_key =
+        p->name != "file" && p->name != "units" && p->name != "fill" && p->name != "edge";
     if (from_file == generator_key)
       if (const auto at = reader.value_loc(p->name))
         context_.error(*at, from_file ? fmt::format("'{}' belongs to generated meshes; a mesh "

@@ -1,16 +1,41 @@
 // What a parsed scene needs before compiling: its mesh files read, shape-memory stiffness
 // calibrated from Young's modulus (scene_io.hpp).
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <memory>
 
 #include "io/units.hpp"
+#include "mesh/surface_check.hpp"
 #include "phymul/calibration.hpp"
 #include "phymul/mesh_io.hpp"
+#include "phymul/meshing.hpp"
 #include "phymul/scene_io.hpp"
 
 namespace phymul {
 namespace {
+
+// `fill: tetra`: the closed surface read from the file, checked, filled with tetrahedra; their
+// quality goes to the file's notes.
+Mesh fill(Mesh surface, double edge, const std::string& file, ObjectSpec& o) {
+  SurfaceCheck check = check_closed_surface(surface);
+  if (!check.problems.empty())
+    throw MeshFileError(
+        file, 0, 0,
+        fmt::format("'fill' needs a closed surface: {}", fmt::join(check.problems, "; ")));
+  try {
+    Mesh volume = fill_with_tetrahedra(surface, edge);
+    const TetraQuality q = tetra_quality(volume);
+    o.mesh.file_notes.push_back(fmt::format(
+        "{}: filled with {} tetrahedra and {} points (edge at most {:g} mm inside): smallest "
+        "dihedral angle {:.1f} degrees, largest radius-edge ratio {:.2f}",
+        file, q.tetrahedra, volume.points.size(), edge * 1e3, q.min_dihedral_deg,
+        q.max_radius_edge));
+    return volume;
+  } catch (const MeshError& e) {
+    throw MeshFileError(file, 0, 0, e.what());
+  }
+}
 
 // A mesh file's path is relative to the scene file; its problems are reported where they
 // are in it, naming the object whose mesh it is.
@@ -18,8 +43,9 @@ void read_mesh(const Scene& scene, ObjectSpec& o, std::vector<Diagnostic>& probl
   const std::filesystem::path path = scene.file.parent_path() / o.mesh.file;
   const io::Unit* unit = io::find_unit(o.mesh.units);
   try {
-    o.mesh.file_mesh = std::make_shared<const Mesh>(
-        read_mesh_file(path, unit ? unit->divisor / unit->scale : 1.0));
+    Mesh mesh = read_mesh_file(path, unit ? unit->divisor / unit->scale : 1.0, &o.mesh.file_notes);
+    if (o.mesh.fill_tetra) mesh = fill(std::move(mesh), *o.mesh.fill_edge, path.string(), o);
+    o.mesh.file_mesh = std::make_shared<const Mesh>(std::move(mesh));
   } catch (const MeshFileError& e) {
     problems.push_back({{e.file, e.line, e.column},
                         fmt::format("{} (the mesh of object '{}', {}:{})", e.message, o.name,
