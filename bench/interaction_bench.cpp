@@ -32,7 +32,7 @@ void BM_ProbeStep(benchmark::State& state) {
   add_volume_constraint(model, c);
   add_fixed_nodes(model, model.components[c].node_sets.at("top"));
   RigidObstacle probe;
-  probe.shape = RigidObstacle::Shape::rounded_cylinder;
+  probe.shape = RigidObstacle::Shape::probe;
   probe.point = Vec3(0, 0, -0.04 - 0.01 + 0.006);
   probe.radius = 0.01;
   probe.friction = 0.2;

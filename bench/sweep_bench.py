@@ -82,6 +82,7 @@ def timed_sweeps(workers, directory):
 
 
 def main(out):
+    load_before = os.getloadavg()[0]  # what else ran meanwhile: the speedup needs two free cores
     with tempfile.TemporaryDirectory() as tmp:
         directory = pathlib.Path(tmp)
         serial = serial_run_times(directory)
@@ -103,6 +104,7 @@ def main(out):
         "cluster_start_s": {str(w): runs[w][0] for w in runs},
         "targets": {"two_worker_speedup": ">= 1.7", "overhead_per_sample_ms": "<= 50"},
         "cores": len(os.sched_getaffinity(0)),
+        "load_average_before_after": [load_before, os.getloadavg()[0]],
         "machine": platform.machine(),
         "python": platform.python_version(),
     }

@@ -153,9 +153,9 @@ struct PressureLoad {
 struct RigidObstacle {
   // plane: the half-space behind `point` opposite to `axis` (the outward normal, free side);
   // sphere: centre `point`; capsule: the points within `radius` of the segment from `point`
-  // to point + length * axis (both ends rounded); rounded_cylinder: an endorectal probe, a
-  // capsule whose base end extends to infinity backwards (open there, rounded at the tip).
-  enum class Shape { plane, sphere, capsule, rounded_cylinder };
+  // to point + length * axis (both ends rounded); probe: a capsule whose base end extends to
+  // infinity backwards (open there, rounded at the tip), its tip's centre at `point`.
+  using Shape = ObstacleShape;
   std::string name;  // names its monitors columns; "" = obstacle<index>
   Shape shape = Shape::plane;
   Vec3 point = Vec3::Zero();  // m, at load time 0
@@ -187,11 +187,9 @@ struct ContactPair {
   double margin = 0.0;
 };
 
-enum class ComponentKind { elastic, rigid, active };
-
 struct Component {
   std::string name;
-  ComponentKind kind = ComponentKind::elastic;
+  ObjectType kind = ObjectType::elastic;
   // Global id of each node of the component's mesh, in mesh order. Stitching (stitch.cpp)
   // merges nodes, so a shared border node appears in the lists of both components.
   std::vector<int> nodes;

@@ -135,6 +135,7 @@ struct NodeSelector {
   SourceLoc loc;
 };
 
+// What an object is, in the scene and in the model it compiles to (Component::kind).
 enum class ObjectType { elastic, rigid, active };
 
 struct MotionSpec {      // a driven rigid object
@@ -223,9 +224,15 @@ struct PressureSpec {
   SourceLoc loc;
 };
 
+// The shape of a rigid obstacle, in the scene and in the model (RigidObstacle). plane: the
+// half-space behind a point, opposite to its outward normal; sphere; capsule: the points within
+// a radius of a segment, both ends rounded; probe: an endorectal probe, a capsule whose base end
+// extends to infinity backwards (open there, rounded at the tip).
+enum class ObstacleShape { plane, sphere, capsule, probe };
+
 // A rigid analytic obstacle (top-level `obstacles:`); see RigidObstacle.
 struct ObstacleSpec {
-  enum class Shape { plane, sphere, capsule, probe };
+  using Shape = ObstacleShape;
   std::string name;  // monitors column; "" = obstacle<index>
   Shape shape = Shape::plane;
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // m

@@ -70,8 +70,8 @@ py::array triangle_view(const std::vector<Triangle>& v, py::handle owner) {
 py::dict component_dict(const Component& c, py::handle owner) {
   py::dict d;
   d["name"] = c.name;
-  d["kind"] = c.kind == ComponentKind::rigid    ? "rigid"
-              : c.kind == ComponentKind::active ? "active"
+  d["kind"] = c.kind == ObjectType::rigid    ? "rigid"
+              : c.kind == ObjectType::active ? "active"
                                                 : "elastic";
   d["nodes"] = int_view(c.nodes, owner);
   d["surface"] = triangle_view(c.boundary, owner);

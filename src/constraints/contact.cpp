@@ -49,7 +49,7 @@ SurfaceDistance distance_from(const RigidObstacle& o, const Vec3& base, const Ve
     case Shape::sphere:
       return around(x, base, o.radius, o.axis);
     case Shape::capsule:
-    case Shape::rounded_cylinder:
+    case Shape::probe:
       return around(x, core_point(o, base, x), o.radius, o.axis);
   }
   return {};

@@ -98,7 +98,7 @@ void add_obstacle(Mesh& mesh, const RigidObstacle& o, const Vec3& base, const Ve
       profile = cap(0.0, r, -1);
       for (auto& p : cap(o.length, r, 1)) profile.push_back(p);
       break;
-    case Shape::rounded_cylinder:  // open base, as the shape: cut a diagonal back from the tip
+    case Shape::probe:  // open base, as the shape: cut a diagonal back from the tip
       profile = {{o.length + r - diagonal, r}};
       for (auto& p : cap(o.length, r, 1)) profile.push_back(p);
       break;

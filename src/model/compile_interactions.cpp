@@ -62,22 +62,9 @@ RigidObstacle obstacle_of(const ObstacleSpec& o, const Model& model, int index) 
   r.motion = o.motion;
   r.keep_inside = o.keep_inside;
   r.friction = o.friction;
-  switch (o.shape) {
-    case ObstacleSpec::Shape::plane:
-      r.shape = Shape::plane;
-      break;
-    case ObstacleSpec::Shape::sphere:
-      r.shape = Shape::sphere;
-      break;
-    case ObstacleSpec::Shape::capsule:
-      r.shape = Shape::capsule;
-      r.length = o.length;
-      break;
-    case ObstacleSpec::Shape::probe:  // the core ray ends at the tip's centre
-      r.shape = Shape::rounded_cylinder;
-      r.length = 0.0;
-      break;
-  }
+  r.shape = o.shape;
+  // A capsule's segment has its length; a probe's core ray ends at the tip's centre.
+  r.length = o.shape == Shape::capsule ? o.length : 0.0;
   for (const std::string& name : o.objects) {
     const int c = component_index(model, name);
     if (c < 0) continue;

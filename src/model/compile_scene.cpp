@@ -74,7 +74,7 @@ struct Compiler {
           !calibrated(o, material))
         return;
       const int c = add_elastic_component(model, o.name, *mesh, material);
-      if (o.type == ObjectType::active) model.components[c].kind = ComponentKind::active;
+      if (o.type == ObjectType::active) model.components[c].kind = ObjectType::active;
       if (o.volume_constraint) {
         add_volume_constraint(model, c);
         model.volumes.back().target_schedule = o.target_volume;
@@ -195,7 +195,7 @@ std::vector<std::array<int, 2>> link_pairs(Compiler& k, const LinkSpec& l) {
 
 bool is_rigid(const Model& model, const std::string& object) {
   for (const Component& c : model.components)
-    if (c.name == object) return c.kind == ComponentKind::rigid;
+    if (c.name == object) return c.kind == ObjectType::rigid;
   return false;
 }
 

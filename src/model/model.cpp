@@ -169,7 +169,7 @@ int add_rigid_component(Model& model, const std::string& name, const Mesh& mesh,
                         Schedule rotation) {
   validate(mesh);
   const int component = add_mesh(model, name, mesh, material);
-  model.components[component].kind = ComponentKind::rigid;
+  model.components[component].kind = ObjectType::rigid;
   RigidBody body;
   body.component = component;
   body.driven = driven;
@@ -231,7 +231,7 @@ void add_rigid_obstacle(Model& model, RigidObstacle obstacle) {
   if (obstacle.shape != Shape::plane && !(obstacle.radius > 0.0))
     throw std::invalid_argument(
         fmt::format("rigid obstacle: 'radius' must be > 0 m (got {})", obstacle.radius));
-  if ((obstacle.shape == Shape::capsule || obstacle.shape == Shape::rounded_cylinder) &&
+  if ((obstacle.shape == Shape::capsule || obstacle.shape == Shape::probe) &&
       !(obstacle.length >= 0.0))
     throw std::invalid_argument(
         fmt::format("rigid obstacle: 'length' must be >= 0 m (got {})", obstacle.length));

@@ -61,7 +61,7 @@ TEST(ContactGeometry, CapsuleSideEndsAndAxis) {
 
 TEST(ContactGeometry, RoundedCylinderIsOpenBackwards) {
   // A probe along +y from (0,-1,0), 0.5 long, radius 0.1: its tip centre is at (0,-0.5,0).
-  const RigidObstacle o = shape(Shape::rounded_cylinder, Vec3(0, -1, 0), Vec3::UnitY(), 0.1, 0.5);
+  const RigidObstacle o = shape(Shape::probe, Vec3(0, -1, 0), Vec3::UnitY(), 0.1, 0.5);
   // Far behind the base it is still a cylinder (a capsule would end there).
   EXPECT_NEAR(obstacle_distance(o, Vec3(0, -50, 0.02), 0).distance, -0.08, 1e-14);
   expect_vec_near(closest_surface_point(o, Vec3(0, -50, 0.02), 0), Vec3(0, -50, 0.1), 1e-14);
@@ -212,7 +212,7 @@ TEST(Contact, ProbeForceBalancesTheSupportReactions) {
   // Probe along +z, 4 mm radius, its tip touching the bottom face (z = -5 mm) at t = 0, then
   // pushed 3 mm up, off the block's axis so the load is not symmetric.
   RigidObstacle probe =
-      shape(Shape::rounded_cylinder, Vec3(0.002, 0.001, -0.019), Vec3::UnitZ(), 0.004, 0.010);
+      shape(Shape::probe, Vec3(0.002, 0.001, -0.019), Vec3::UnitZ(), 0.004, 0.010);
   probe.motion = Schedule{{0.0, 1.0}, {Vec3::Zero(), Vec3(0, 0, 0.003)}};
   add_rigid_obstacle(model, probe);
   // Every free node within 1e-12 N of balance: summed over the block, well inside 1e-6 of

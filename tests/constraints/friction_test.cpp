@@ -195,7 +195,7 @@ TEST(ContactForce, ProbeForceAgreesWithObstacleForceAndSupports) {
                                       testing::material(20.0));
   add_fixed_nodes(model, model.components[c].node_sets.at("top"));
   RigidObstacle probe;
-  probe.shape = Shape::rounded_cylinder;
+  probe.shape = Shape::probe;
   probe.point = Vec3(0.002, 0.001, -0.009);
   probe.radius = 0.004;
   probe.motion = Schedule{{0.0, 1.0}, {Vec3::Zero(), Vec3(0, 0, 0.003)}};

@@ -14,7 +14,7 @@ Model strip(double ratio, Schedule activation) {
   add_elastic_component(model, "muscle",
                         make_box(Vec3(0.04, 0.01, 0.01), {4, 1, 1}, CellType::hexa),
                         testing::material(20.0));
-  model.components[0].kind = ComponentKind::active;
+  model.components[0].kind = ObjectType::active;
   add_fibres(model, 0, Vec3(2.0, 0.0, 0.0), 100.0, ratio, std::move(activation));
   return model;
 }

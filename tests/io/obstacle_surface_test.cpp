@@ -28,7 +28,7 @@ TEST(ObstacleSurface, VerticesLieOnTheShapesAndTrianglesFaceOutwards) {
       shape(Shape::plane, Vec3(0, 0, -0.01), Vec3(0.2, 0.1, 1.0), 0.0, 0.0),
       shape(Shape::sphere, Vec3(0.03, 0, 0), Vec3::UnitZ(), 0.007, 0.0),
       shape(Shape::capsule, Vec3(-0.03, 0, 0), Vec3(1, 1, 0), 0.005, 0.02),
-      shape(Shape::rounded_cylinder, Vec3(0, 0, -0.05), Vec3(0, 0.3, 1), 0.01, 0.02)};
+      shape(Shape::probe, Vec3(0, 0, -0.05), Vec3(0, 0.3, 1), 0.01, 0.02)};
   const double t = 0.5;  // half way along the motion
   std::vector<int> owner;
   const Mesh mesh =

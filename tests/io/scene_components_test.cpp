@@ -73,7 +73,7 @@ TEST(SceneComponents, CompilesALimitedStitchAndTheDoubledFace) {
   ASSERT_EQ(model.fibres.size(), 1u);
   EXPECT_EQ(model.fibres[0].polylines.rows(), 9);
   EXPECT_DOUBLE_EQ(model.fibres[0].stiffness, 30.0);
-  EXPECT_EQ(model.components[1].kind, ComponentKind::active);
+  EXPECT_EQ(model.components[1].kind, ObjectType::active);
 }
 
 }  // namespace

@@ -107,7 +107,7 @@ TEST(SceneInteractions, CompileBuildsTheLoadsAndShapes) {
 
   ASSERT_EQ(m.obstacles.size(), 3u);
   const RigidObstacle& probe = m.obstacles[0];
-  EXPECT_EQ(probe.shape, RigidObstacle::Shape::rounded_cylinder);
+  EXPECT_EQ(probe.shape, RigidObstacle::Shape::probe);
   EXPECT_EQ(probe.name, "probe");
   EXPECT_EQ(probe.nodes, m.components[0].nodes);  // the block only
   EXPECT_DOUBLE_EQ(probe.friction, 0.2);

@@ -179,7 +179,7 @@ TEST(Simulator, StepsWithInteractionsDoNotAllocate) {
   add_pressure(model, {ball, model.components[ball].boundary,
                        Schedule{{0.0, 0.01}, {Vec3::Zero(), Vec3(500, 0, 0)}}});
   RigidObstacle probe;
-  probe.shape = RigidObstacle::Shape::rounded_cylinder;
+  probe.shape = RigidObstacle::Shape::probe;
   probe.point = Vec3(0, 0, 0.04);
   probe.axis = -Vec3::UnitZ();
   probe.radius = 0.004;
