@@ -1,10 +1,9 @@
-#include "calibrate_command.hpp"
-
 #include <iostream>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "commands.hpp"
 #include "phymul/calibration.hpp"
 #include "phymul/vtk.hpp"
 
@@ -39,7 +38,7 @@ int run(Settings& s) {
 
 }  // namespace
 
-CalibrateCommand add_calibrate_command(CLI::App& parent) {
+Command add_calibrate_command(CLI::App& parent) {
   auto settings = std::make_shared<Settings>();
   Settings& s = *settings;
   CLI::App* app = parent.add_subcommand(

@@ -7,16 +7,12 @@
 #include <cstdio>
 #include <iostream>
 
-#include "calibrate_command.hpp"
-#include "mesh_command.hpp"
+#include "commands.hpp"
 #include "phymul/model.hpp"
 #include "phymul/run.hpp"
 #include "phymul/scene.hpp"
 #include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
-#include "prostate_command.hpp"
-#include "sweep_command.hpp"
-#include "truthcube_command.hpp"
 
 namespace {
 

@@ -1,10 +1,9 @@
-#include "mesh_command.hpp"
-
 #include <fmt/format.h>
 
 #include <iostream>
 #include <memory>
 
+#include "commands.hpp"
 #include "phymul/mesh_io.hpp"
 #include "phymul/meshing.hpp"
 #include "phymul/schema.hpp"
@@ -51,7 +50,7 @@ int mesh(const Settings& s) {
 
 }  // namespace
 
-MeshCommand add_mesh_command(CLI::App& parent) {
+Command add_mesh_command(CLI::App& parent) {
   auto settings = std::make_shared<Settings>();
   CLI::App* app = parent.add_subcommand(
       "mesh", "fill a closed surface (STL, OBJ, PLY) with tetrahedra, written as .vtu");

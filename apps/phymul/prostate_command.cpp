@@ -1,5 +1,3 @@
-#include "prostate_command.hpp"
-
 #include <fmt/format.h>
 #include <omp.h>
 #include <unistd.h>
@@ -11,6 +9,7 @@
 #include <iostream>
 #include <memory>
 
+#include "commands.hpp"
 #include "phymul/run.hpp"
 #include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
@@ -143,7 +142,7 @@ int run(Settings& s) {
 
 }  // namespace
 
-ProstateCommand add_prostate_command(CLI::App& parent) {
+Command add_prostate_command(CLI::App& parent) {
   auto settings = std::make_shared<Settings>();
   Settings& s = *settings;
   prostate::Options& o = s.study;

@@ -1,5 +1,3 @@
-#include "sweep_command.hpp"
-
 #include <fmt/format.h>
 #include <unistd.h>
 
@@ -12,6 +10,8 @@
 #include <string>
 #include <system_error>
 #include <vector>
+
+#include "commands.hpp"
 
 namespace phymul::cli {
 namespace {
@@ -102,7 +102,7 @@ int run(const Settings& s) {
 
 }  // namespace
 
-SweepCommand add_sweep_command(CLI::App& parent) {
+Command add_sweep_command(CLI::App& parent) {
   auto settings = std::make_shared<Settings>();
   Settings& s = *settings;
   CLI::App* app = parent.add_subcommand(

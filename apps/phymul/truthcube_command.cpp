@@ -1,5 +1,3 @@
-#include "truthcube_command.hpp"
-
 #include <fmt/format.h>
 
 #include <cstdlib>
@@ -7,6 +5,7 @@
 #include <iostream>
 #include <memory>
 
+#include "commands.hpp"
 #include "phymul/installation.hpp"
 #include "phymul/studies/truthcube.hpp"
 #include "phymul/vtk.hpp"
@@ -53,7 +52,7 @@ int run(Settings& s) {
 
 }  // namespace
 
-TruthcubeCommand add_truthcube_command(CLI::App& parent) {
+Command add_truthcube_command(CLI::App& parent) {
   auto settings = std::make_shared<Settings>();
   Settings& s = *settings;
   CLI::App* app = parent.add_subcommand(
