@@ -187,6 +187,14 @@ struct ObjectSpec {
   SourceLoc loc;
 };
 
+// Whether the object's calibration was made for its material as it stands (the same E, nu and
+// axis): prepare_scene then keeps it and compile_scene uses its K.
+inline bool calibration_current(const ObjectSpec& o) {
+  const MaterialSpec& m = o.material;
+  return o.calibration && o.calibration->young == m.young && o.calibration->poisson == m.poisson &&
+         o.calibration->axis == m.calibration_axis;
+}
+
 // Coincident nodes of two objects: merged (stitches, Fig. 1a) or doubled (Fig. 1b).
 struct LinkSpec {
   std::string object, with;

@@ -10,6 +10,7 @@
 
 #include "phymul/data.hpp"
 #include "phymul/model.hpp"
+#include "phymul/scene.hpp"
 
 namespace phymul::python {
 
@@ -53,6 +54,11 @@ py::array view(const T* data, size_t count, size_t columns, size_t stride, py::h
   if (!writable) a.attr("setflags")(py::arg("write") = false);
   return a;
 }
+
+// A copy of a scene edited in Python, made ready to compile: a Young's modulus set to zero
+// (stiffness set directly) drops its calibration, then prepare_scene reads the mesh files and
+// calibrates what changed.
+Scene prepared_copy(const Scene& edited);
 
 void bind_scene(py::module_& m);
 void bind_model(py::module_& m);

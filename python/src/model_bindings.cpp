@@ -25,6 +25,14 @@ Busy::Busy(PyData& d) : d_(d) {
       "this Data is being stepped in another thread; give each thread its own Data "
       "(phymul.Data(model))");
 }
+Scene prepared_copy(const Scene& edited) {
+  Scene scene = edited;
+  for (ObjectSpec& o : scene.objects)
+    if (o.material.young == 0.0) o.calibration.reset();  // K was set directly
+  prepare_scene(scene);
+  return scene;
+}
+
 Busy::~Busy() {
   if (nested_) return;
   d_.owner = std::thread::id{};
@@ -38,11 +46,7 @@ using ModelPtr = std::shared_ptr<const Model>;
 // What compile does to a scene edited in Python before compiling: its mesh files read and
 // Young's moduli calibrated (prepare_scene), on a copy so the Python scene is left as it was.
 ModelPtr compile(const Scene& edited) {
-  Scene scene = edited;
-  for (ObjectSpec& o : scene.objects)
-    if (o.material.young == 0.0) o.calibration.reset();  // K was set directly
-  prepare_scene(scene);
-  return std::make_shared<const Model>(compile_scene(scene));
+  return std::make_shared<const Model>(compile_scene(prepared_copy(edited)));
 }
 
 const Model& model_of(const PyData& d, const Model& model) {
@@ -72,7 +76,7 @@ py::dict component_dict(const Component& c, py::handle owner) {
   d["name"] = c.name;
   d["kind"] = c.kind == ObjectType::rigid    ? "rigid"
               : c.kind == ObjectType::active ? "active"
-                                                : "elastic";
+                                             : "elastic";
   d["nodes"] = int_view(c.nodes, owner);
   d["surface"] = triangle_view(c.boundary, owner);
   py::dict sets;

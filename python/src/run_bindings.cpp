@@ -20,9 +20,6 @@ namespace {
 // A run's files as `phymul run` writes them; the report comes back as report.json's text.
 std::string run(const Scene& edited, const std::string& out, bool progress,
                 const std::string& checkpoint_every, bool resume) {
-  Scene scene = edited;
-  for (ObjectSpec& o : scene.objects)
-    if (o.material.young == 0.0) o.calibration.reset();
   RunOptions options;
   options.output_dir = out;
   options.progress = progress;
@@ -32,8 +29,7 @@ std::string run(const Scene& edited, const std::string& out, bool progress,
   RunReport report;
   {
     py::gil_scoped_release release;
-    prepare_scene(scene);
-    report = run_scene(scene, options);
+    report = run_scene(prepared_copy(edited), options);
   }
   return report_json(report);
 }

@@ -57,10 +57,7 @@ void read_mesh(const Scene& scene, ObjectSpec& o, std::vector<Diagnostic>& probl
 // names the others.
 void calibrate(ObjectSpec& o, std::vector<Diagnostic>& problems) {
   MaterialSpec& material = o.material;
-  const std::optional<StiffnessCalibration>& done = o.calibration;
-  if (done && done->young == material.young && done->poisson == material.poisson &&
-      done->axis == material.calibration_axis)
-    return;  // a scene prepared before
+  if (calibration_current(o)) return;  // a scene prepared before
   try {
     o.calibration = calibration::calibrate_object(o.name, make_mesh(o.mesh), material,
                                                   o.volume_constraint, material.calibration_axis);

@@ -44,11 +44,9 @@ struct Compiler {
 
   // A shape-memory material given `young`: the K its calibration found (prepare_scene).
   bool calibrated(const ObjectSpec& o, MaterialSpec& material) {
-    const std::optional<StiffnessCalibration>& c = o.calibration;
-    if (c && c->young == material.young && c->poisson == material.poisson &&
-        c->axis == material.calibration_axis) {
-      material.stiffness = c->stiffness;
-      model.stiffness_calibrations.push_back(*c);
+    if (calibration_current(o)) {
+      material.stiffness = o.calibration->stiffness;
+      model.stiffness_calibrations.push_back(*o.calibration);
       return true;
     }
     fail(material.young_loc.line > 0 ? material.young_loc : o.loc,
