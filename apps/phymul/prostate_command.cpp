@@ -23,7 +23,7 @@ namespace {
 struct Settings {
   prostate::Options study;
   std::vector<double> fillings_ml{50, 100, 200, 300, 400};
-  std::string probe = "both", model = "lsm", neck, dt_estimate;
+  std::string probe = "both", model = "lsm", neck, dt_estimate, support = "lateral";
   double force = 0, lift_mm = 0, young_kpa = 0, mass_scaling_us = -1;
   int bladder_subdivisions = 0;
   std::string output = "results/prostate", json_file, scenes;
@@ -79,6 +79,7 @@ int run(Settings& s) {
   if (s.model == "fem") o.prostate_model = ElasticModel::fem;
   if (s.neck == "prostate") o.neck = prostate::Neck::prostate;
   if (s.neck == "bladder") o.neck = prostate::Neck::bladder;
+  if (s.support == "bladder") o.support = prostate::Support::bladder;
   if (s.bladder_subdivisions > 0) o.bladder_subdivisions = s.bladder_subdivisions;
   if (s.force > 0) o.probe_force = s.force;
   if (s.lift_mm > 0) o.probe_lift = s.lift_mm * 1e-3;
@@ -180,6 +181,16 @@ Command add_prostate_command(CLI::App& parent) {
                   fmt::format("bladder mesh: icosahedron subdivisions, 10 4^n + 2 nodes [{}]",
                               o.bladder_subdivisions))
       ->check(CLI::Range(1, 5));
+  app->add_option("--support", s.support,
+                  "what holds the prostate: its lateral sides, or only the bladder it hangs "
+                  "from (the paper's: the bladder's top node fixed, the organs in contact)")
+      ->check(CLI::IsMember({"lateral", "bladder"}))
+      ->capture_default_str();
+  app->add_option("--support-stiffness", o.support_stiffness,
+                  "--support bladder: the lateral nodes on springs of this stiffness (N/m per "
+                  "node; 0: none)")
+      ->check(CLI::Range(0.0, 1e6))
+      ->capture_default_str();
   app->add_option("--neck", s.neck,
                   "which organ's nodes choose the neck stitches (the coarser one at the neck) "
                   "[prostate]")

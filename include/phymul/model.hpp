@@ -187,6 +187,13 @@ struct ContactPair {
   double margin = 0.0;
 };
 
+// Nodes pulled back to their rest positions by linear springs: a compliant support (the
+// soft tissue or ligaments around an organ), where a fixed node would be a rigid one.
+struct SpringSupport {
+  std::vector<int> nodes;
+  double stiffness = 0.0;  // N/m, of each node's spring
+};
+
 struct Component {
   std::string name;
   ObjectType kind = ObjectType::elastic;
@@ -240,6 +247,7 @@ struct Model {
   std::vector<VolumeConstraint> volumes;
   std::vector<AppliedForce> forces;
   std::vector<PrescribedDisplacement> prescribed;
+  std::vector<SpringSupport> springs;
   std::vector<PressureLoad> pressures;
   std::vector<RigidObstacle> obstacles;
   std::vector<RigidBody> rigid_bodies;
@@ -288,6 +296,7 @@ void add_volume_constraint(Model& model, int component);
 void add_fixed_nodes(Model& model, const std::vector<int>& nodes);
 void add_prescribed_displacement(Model& model, PrescribedDisplacement prescribed);
 void add_applied_force(Model& model, AppliedForce force);
+void add_spring_support(Model& model, SpringSupport springs);
 void add_pressure(Model& model, PressureLoad pressure);
 void add_rigid_obstacle(Model& model, RigidObstacle obstacle);
 // Frictionless contact between two components with closed boundaries.

@@ -211,12 +211,13 @@ struct LoadSpec {  // applied nodal force, the same on every selected node
 };
 
 struct ConstraintSpec {
-  enum class Kind { fixed, displacement };
+  enum class Kind { fixed, displacement, spring };
   Kind kind = Kind::fixed;
   std::string object;
   NodeSelector nodes;
   std::array<bool, 3> axes{true, true, true};  // displacement: which axes are prescribed
   Schedule displacement;                       // m, from the rest position
+  double stiffness = 0.0;                      // N/m, spring: of each node's spring
   SourceLoc loc;
 };
 

@@ -67,9 +67,11 @@ std::vector<Vec3> support_reactions(const Model& model, const Data& data);
 // Enclosed volume (m^3) of every component with a closed boundary, in component order (NaN
 // for the others).
 std::vector<double> component_volumes(const Model& model, const Data& data);
-// Force (N) the obstacle exerts on the body: minus Data::f, on the free axes, summed over the
-// nodes it acts on that touch its surface (within 1e-12 m) at Data::time. Valid at
-// equilibrium only (after relax), where the contact force is all that balances them.
+// Force (N) the obstacle exerts on the body: minus Data::f on the free axes, less the volume
+// constraints' pressures, summed over the nodes it acts on that touch its surface (within
+// 1e-12 m, or put on it by the last step's contact stage: Data::obstacle_touching) at
+// Data::time. Valid at equilibrium only (after relax), where the contact is what balances
+// what is left on them.
 Vec3 obstacle_force(const Model& model, const Data& data, int obstacle);
 
 // Largest stable time step (s) of the explicit schemes for this model, from a Gershgorin

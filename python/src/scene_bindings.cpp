@@ -333,6 +333,7 @@ void bind_interactions(py::module_& m) {
   constraint.def_readonly("object", &ConstraintSpec::object);
   schedule(constraint, "displacement", "constraint", "schedule", &ConstraintSpec::displacement,
            false);
+  quantity(constraint, "constraint", "stiffness", &ConstraintSpec::stiffness);
 
   py::class_<ObstacleSpec> obstacle(m, "Obstacle", "An entry of the scene's `obstacles`.");
   obstacle.def_readonly("name", &ObstacleSpec::name)

@@ -215,20 +215,4 @@ void apply_contact_velocities(const Model& model, const Controls& controls, std:
   }
 }
 
-Vec3 obstacle_force(const Model& model, const Data& state, int obstacle) {
-  const RigidObstacle& o = model.obstacles.at(size_t(obstacle));
-  Vec3 force = Vec3::Zero();
-  const Vec3 base = shape_base(o, state.controls.obstacle_motion[size_t(obstacle)], state.time);
-  auto add = [&](int i) {
-    const double d = distance_from(o, base, state.x[i]).distance;
-    if (std::abs(d) <= 1e-12) force -= state.f[i].cwiseProduct(free_axes_of(model.inverse_mass[i]));
-  };
-  if (o.nodes.empty()) {
-    for (int i = 0; i < model.node_count(); ++i) add(i);
-  } else {
-    for (int i : o.nodes) add(i);
-  }
-  return force;
-}
-
 }  // namespace phymul

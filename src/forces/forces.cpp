@@ -8,6 +8,21 @@
 #include "model/workspace.hpp"
 
 namespace phymul {
+namespace {
+
+// Each node's spring pulls it back to its rest position; returns the springs' energy (J).
+double add_spring_forces(const SpringSupport& springs, std::span<const Vec3> rest,
+                         std::span<const Vec3> x, std::span<Vec3> f) {
+  double energy = 0.0;
+  for (int i : springs.nodes) {
+    const Vec3 stretch = x[size_t(i)] - rest[size_t(i)];
+    f[size_t(i)] -= springs.stiffness * stretch;
+    energy += 0.5 * springs.stiffness * stretch.squaredNorm();
+  }
+  return energy;
+}
+
+}  // namespace
 
 void compute_forces(const Model& model, Data& s, double load_time) {
   Workspace& w = *s.work;
@@ -40,6 +55,8 @@ void compute_forces(const Model& model, Data& s, double load_time) {
                                                      w.shape_memory_blocks[k]);
     first_rotation += m.nodes.size();
   }
+  for (const SpringSupport& springs : model.springs)
+    s.shape_memory_energy += add_spring_forces(springs, model.rest_position, s.x, s.f);
   for (const FibreBundle& fibres : model.fibres) add_fibre_forces(fibres, s.x, load_time, s.f);
   for (size_t k = 0; k < model.explicit_fem.size(); ++k)
     s.shape_memory_energy += add_explicit_fem_forces(model.explicit_fem[k], model.rest_position,

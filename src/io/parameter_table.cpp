@@ -23,6 +23,7 @@ const Condition kFem{"model", {"fem"}};
 const Condition kVolume{"surface", {"false"}};
 const Condition kStatic{"mode", {"static"}};
 const Condition kDisplacement{"type", {"displacement"}};
+const Condition kSpring{"type", {"spring"}};
 const Condition kRigid{"type", {"rigid"}};
 const Condition kActive{"type", {"active"}};
 const Condition kForce{"type", {"force"}};
@@ -631,9 +632,11 @@ std::vector<Parameter> constraint_parameters() {
       {.section = "constraint",
        .name = "type",
        .kind = Kind::choice,
-       .choices = {"fixed", "displacement"},
+       .choices = {"fixed", "displacement", "spring"},
        .required = true,
-       .doc = "`fixed`: held at the rest position; `displacement`: moved as prescribed."},
+       .doc = "`fixed`: held at the rest position; `displacement`: moved as prescribed; "
+              "`spring`: each node pulled back to its rest position by a linear spring (a "
+              "compliant support: the soft tissue or ligaments around an organ)."},
       {.section = "constraint",
        .name = "object",
        .kind = Kind::name,
@@ -664,6 +667,15 @@ std::vector<Parameter> constraint_parameters() {
        .when = {kDisplacement},
        .one_of = "value",
        .doc = "Displacement over time: a list of {t, value} events."},
+      {.section = "constraint",
+       .name = "stiffness",
+       .kind = Kind::quantity,
+       .dimension = Dimension::stiffness,
+       .range = gt(0),
+       .required = true,
+       .when = {kSpring},
+       .doc = "Stiffness of each node's spring. A layer of tissue of modulus E and thickness t "
+              "over an area A holding n nodes: E A / (t n)."},
   };
 }
 

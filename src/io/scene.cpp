@@ -506,7 +506,8 @@ ConstraintSpec SceneBuilder::constraint(SectionReader& reader) {
   spec.loc = reader.loc();
   reader.read("type", spec.kind,
               {{"fixed", ConstraintSpec::Kind::fixed},
-               {"displacement", ConstraintSpec::Kind::displacement}});
+               {"displacement", ConstraintSpec::Kind::displacement},
+               {"spring", ConstraintSpec::Kind::spring}});
   refer(reader, spec.object);
   reader.read("nodes", spec.nodes);
   reader.read("axes", spec.axes);
@@ -514,6 +515,7 @@ ConstraintSpec SceneBuilder::constraint(SectionReader& reader) {
   if (reader.read("displacement", displacement))
     spec.displacement = Schedule::constant(displacement);
   reader.read("schedule", spec.displacement);
+  reader.read("stiffness", spec.stiffness);
   reader.done();
   // A fixed node is a zero displacement on every axis; spelling it out lets later stages
   // treat both kinds alike.

@@ -264,6 +264,8 @@ Model compile_scene(const Scene& scene) {
       if (nodes.empty()) continue;
       if (c.kind == ConstraintSpec::Kind::fixed)
         add_fixed_nodes(k.model, nodes);
+      else if (c.kind == ConstraintSpec::Kind::spring)
+        add_spring_support(k.model, {std::move(nodes), c.stiffness});
       else
         add_prescribed_displacement(k.model, {std::move(nodes), c.axes, c.displacement});
     }

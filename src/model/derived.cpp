@@ -77,6 +77,8 @@ std::vector<double> stiffness_row_sums(const Model& model) {
       }
     }
   for (const ExplicitFem& e : model.explicit_fem) add_explicit_fem_rows(e, row);
+  for (const SpringSupport& springs : model.springs)
+    for (int i : springs.nodes) row[size_t(i)] += springs.stiffness;
   return row;
 }
 

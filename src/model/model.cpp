@@ -211,6 +211,14 @@ void add_applied_force(Model& model, AppliedForce force) {
   model.forces.push_back(std::move(force));
 }
 
+void add_spring_support(Model& model, SpringSupport springs) {
+  check_node_ids(model, springs.nodes, "spring support");
+  if (!(springs.stiffness > 0.0 && std::isfinite(springs.stiffness)))
+    throw std::invalid_argument(
+        fmt::format("spring support: stiffness {} N/m is not > 0", springs.stiffness));
+  model.springs.push_back(std::move(springs));
+}
+
 void add_pressure(Model& model, PressureLoad pressure) {
   if (pressure.component < 0 || pressure.component >= int(model.components.size()))
     throw std::invalid_argument(

@@ -84,6 +84,11 @@ void check_newton_scene(const Scene& scene, std::vector<Diagnostic>& problems) {
   refuse_all(scene.obstacles, "obstacles", at, problems);
   refuse_all(scene.contacts, "contacts", at, problems);
   refuse_all(scene.doubled, "doubled nodes", at, problems);
+  for (const ConstraintSpec& c : scene.constraints)
+    if (c.kind == ConstraintSpec::Kind::spring)
+      problems.push_back({c.loc, fmt::format("'spring' constraints are not supported by "
+                                             "'solver: newton'{}; use 'solver: relaxation'",
+                                             at)});
 }
 
 }  // namespace phymul

@@ -18,7 +18,7 @@ namespace phymul {
 namespace {
 
 constexpr int kParallelFrom = 4096;  // nodes; below, a thread team costs more than it saves
-constexpr double kTouching = 1e-12;  // m, as obstacle_force counts contact
+constexpr double kTouching = 1e-12;  // m: a node this close touches an obstacle
 
 Vec3 free_axes(const Vec3& inverse_mass) {
   return (inverse_mass.array() > 0.0).cast<double>().matrix();
@@ -238,11 +238,42 @@ std::vector<Vec3> support_reactions(const Model& model, const Data& d) {
     const Vec3 held = Vec3::Ones() - free_axes(model.inverse_mass[i]);
     reaction[i] = -reaction[i].cwiseProduct(held);
   }
+  // A spring support holds its nodes with its springs' pull.
+  for (const SpringSupport& springs : model.springs)
+    for (int i : springs.nodes)
+      reaction[size_t(i)] -= springs.stiffness * (d.x[size_t(i)] - model.rest_position[size_t(i)]);
   // A free rigid body is held by nothing: its nodes' forces move it.
   for (const RigidBody& body : model.rigid_bodies)
     if (!body.driven)
       for (int i : body.nodes) reaction[i].setZero();
   return reaction;
+}
+
+Vec3 obstacle_force(const Model& model, const Data& d, int obstacle) {
+  // The residual's own accounting on a copy of the scratch: each volume's pressure out (the
+  // contact normals left to the contacts), so that what is left on a touching node is minus
+  // the contact's force.
+  Workspace work = *d.work;
+  work.contacts.clear();
+  const RigidObstacle& o = model.obstacles.at(size_t(obstacle));
+  const Schedule& motion = d.controls.obstacle_motion[size_t(obstacle)];
+  std::vector<Vec3> r(d.f.size()), grad(d.x.size(), Vec3::Zero());
+  for (int i = 0; i < model.node_count(); ++i)
+    r[size_t(i)] = d.f[size_t(i)].cwiseProduct(free_axes(model.inverse_mass[size_t(i)]));
+  auto add = [&](int i) {
+    const SurfaceDistance s = obstacle_distance(o, motion, d.x[size_t(i)], d.time);
+    const bool moved = !d.obstacle_touching.empty() && d.obstacle_touching[size_t(i)] == obstacle;
+    if (std::abs(s.distance) <= kTouching || moved)
+      work.contacts.push_back({i, o.keep_inside ? Vec3(-s.normal) : s.normal, o.friction});
+  };
+  if (o.nodes.empty())
+    for (int i = 0; i < model.node_count(); ++i) add(i);
+  else
+    for (int i : o.nodes) add(i);
+  remove_volume_pressures(model, work, d.x, r, grad, /*on_free_axes=*/true, work.contacts);
+  Vec3 force = Vec3::Zero();
+  for (const ObstacleContact& c : work.contacts) force -= r[size_t(c.node)];
+  return force;
 }
 
 std::vector<double> component_volumes(const Model& model, const Data& d) {

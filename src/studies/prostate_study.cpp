@@ -94,6 +94,29 @@ double touching_axis_height(const Model& model, const Data& state, double radius
   return z;
 }
 
+// Where the probe's force goes at an equilibrium (FillingResult). The prostate's nodes, the
+// stitched ones included, are one body: its neck force is what balances the rest on it.
+void force_paths(const Simulator& sim, FillingResult& r) {
+  const Model& model = sim.model();
+  const int prostate = component_index(model, "prostate");
+  const Component& p = model.components[size_t(prostate)];
+  const Component& b = model.components[size_t(component_index(model, "bladder"))];
+  const std::vector<Vec3> reactions = sim.support_reactions();
+  double weight = 0.0;
+  for (int i : p.nodes) {
+    weight += model.mass[size_t(i)] * model.gravity.z();
+    r.hold_force += reactions[size_t(i)].z();
+  }
+  for (int i : b.nodes)
+    if (std::find(p.nodes.begin(), p.nodes.end(), i) == p.nodes.end())
+      r.top_node_force += reactions[size_t(i)].z();
+  const std::vector<Vec3>& pair = sim.data().pair_contact_force;
+  // the force the pair's second component exerted on its first
+  if (!pair.empty())
+    r.contact_force = model.contact_pairs[0].components[0] == prostate ? pair[0].z() : -pair[0].z();
+  r.neck_force = -(weight + r.probe_force + r.hold_force + r.contact_force);
+}
+
 StaticResult relax_to(Simulator& sim, double load_time) {
   const StaticResult r = sim.relax(load_time, kMaxIterations);
   if (!r.converged)
@@ -210,8 +233,11 @@ FillingResult run_filling(const Options& o, double filling, Probe probe,
   r.centre_lift = after.centre.z() - before.centre.z();
   r.bladder_volume = sim.component_volumes()[size_t(component_index(model, "bladder"))];
   r.probe_force = probe_force_from_balance(sim);
+  force_paths(sim, r);
   if (probe == Probe::pressure)
     r.pressure_resultant = pressure_resultant(model, sim.data(), s.duration).z();
+  else
+    r.probe_contact_force = obstacle_force(model, sim.data(), 0).z();
   const Component& p = model.components[size_t(component_index(model, "prostate"))];
   const Component& b = model.components[size_t(component_index(model, "bladder"))];
   for (int i : p.nodes)

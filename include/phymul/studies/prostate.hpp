@@ -21,6 +21,14 @@ enum class Neck {
   prostate,  // the prostate's base nodes within stitch_radius of its axis
 };
 
+// What holds the prostate up besides the probe.
+enum class Support {
+  lateral,  // its lateral sides held rigidly (the endopelvic fascia on the levator ani)
+  bladder,  // the paper's: only the bladder's top node is fixed, the prostate hangs from the
+            // neck, and the two organs touch beyond it (a frictionless contact pair)
+};
+const char* support_name(Support support);
+
 // Every quantity in SI; README "The prostate study" gives the source of each default.
 struct Options {
   std::vector<double> fillings{50e-6, 100e-6, 200e-6, 300e-6, 400e-6};  // m^3 of urine
@@ -34,7 +42,11 @@ struct Options {
   double prostate_young = 20e3;       // Pa, finite elements
   double prostate_poisson = 0.45;     // finite elements (linear tetrahedra)
   int prostate_hexahedra = 4;         // per axis, a grid mapped onto the ellipsoid
-  double anchor_fraction = 0.85;      // nodes beyond this share of the half-width are held
+  Support support = Support::lateral;
+  // N/m per node, Support::bladder: the lateral nodes (as Support::lateral holds them) on
+  // springs to their rest positions instead, the soft tissue around the gland (0: none).
+  double support_stiffness = 0.0;
+  double anchor_fraction = 0.85;  // Support::lateral: nodes beyond this share of the half-width
   // Bladder: a surfacic sphere holding the filling, shaped by gravity from its top node.
   double bladder_wall_mass = 0.040;   // kg
   double urine_density = 1015.0;      // kg/m^3
@@ -94,12 +106,18 @@ struct FillingResult {
   double prostate_height = 0.0;           // m, before the probe (top to bottom node)
   double prostate_deformation_pct = 0.0;  // height lost to the probe, % of that height
   double centre_displacement = 0.0;       // m, of the prostate's mean node position
-  double probe_force = 0.0;         // N, upward, from the equilibrium of weights and held nodes
-  double pressure_resultant = 0.0;  // N, pressure probe: its pressure summed on its faces
-  double centre_lift = 0.0;         // m, its upward part
-  std::vector<int> stitched;        // global ids of the nodes both organs share
+  double probe_force = 0.0;          // N, upward, from the equilibrium of weights and held nodes
+  double pressure_resultant = 0.0;   // N, pressure probe: its pressure summed on its faces
+  double probe_contact_force = 0.0;  // N, rigid probe: upward, from its contact stage
+  double centre_lift = 0.0;          // m, its upward part
+  std::vector<int> stitched;         // global ids of the nodes both organs share
   int model_nodes = 0;
-  long iterations = 0;              // of the static relaxation, all equilibria
+  long iterations = 0;  // of the static relaxation, all equilibria
+  // Where the probe's upward force goes at the last equilibrium (N, z, upward on the
+  // prostate positive): the bladder's pull at the neck (what balances the prostate's other
+  // forces: its weight, the probe, the contact and its own holds), the bladder's push through
+  // the contact beyond the neck, the prostate's lateral holds and the bladder's top node.
+  double neck_force = 0.0, contact_force = 0.0, hold_force = 0.0, top_node_force = 0.0;
   std::vector<Vec3> before, after;  // node positions
 };
 
