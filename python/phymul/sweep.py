@@ -435,11 +435,14 @@ _PROSTATE_PARAMETERS = {
     "hexahedra": ("--hexahedra", "integer", 1, (2, 40)),
     "probe": ("--probe", "choice", ("pressure", "rigid"), None),
     "coarse": ("--coarse-bladder", "flag", None, None),
+    "support": ("--support", "choice", ("lateral", "bladder"), None),
+    "support_stiffness": ("--support-stiffness", "stiffness", 1.0, (1e-3, 1e6)),
 }
 _PROSTATE_DEFAULTS = {"filling": 50e-6, "probe": "pressure"}
 _PROSTATE_FIGURES = ("prostate_deformation_pct", "centre_displacement_mm", "centre_lift_mm",
                      "probe_force_n", "pressure_resultant_n", "bladder_volume_ml",
-                     "target_volume_ml", "prostate_height_mm", "stitched_nodes", "iterations")
+                     "target_volume_ml", "prostate_height_mm", "neck_force_n", "contact_force_n",
+                     "hold_force_n", "top_node_force_n", "stitched_nodes", "iterations")
 _UNITS = {"stiffness": "N/m", "volume": "m^3", "force": "N", "length": "m"}
 # A scratch scene whose fields parse quantities with the engine's own units.
 _SCRATCH = ("objects:\n  - name: scratch\n    mesh: {generator: box}\n"

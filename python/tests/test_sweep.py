@@ -304,6 +304,25 @@ outputs: [prostate_deformation_pct, {study: probe_force_n, name: force_N}]
     assert deformations[1] > 2 * deformations[0] > 0  # 2.5 times the force
 
 
+def test_a_sweep_over_the_prostates_springs_in_the_papers_configuration(cluster, tmp_path):
+    # --support bladder: the prostate hangs from the bladder; springs on its sides hold it
+    # more the stiffer they are, so the rigid probe's rise deforms it more and the bladder's
+    # top node holds less.
+    sweep_file = write_sweep(tmp_path / "sweep.yaml", """study: prostate
+set: {coarse: true, filling: 50 mL, probe: rigid, support: bladder}
+parameters:
+  - path: support_stiffness
+    values: [2 N/m, 50 N/m]
+outputs: [prostate_deformation_pct, hold_force_n, top_node_force_n]
+""")
+    code, output = run_cli("sweep", sweep_file, "-o", tmp_path / "out", "--scheduler",
+                           cluster.address)
+    assert code == 0, output
+    soft, stiff = read_results(tmp_path / "out")
+    assert float(stiff["prostate_deformation_pct"]) > float(soft["prostate_deformation_pct"])
+    assert float(soft["top_node_force_n"]) > float(stiff["top_node_force_n"]) > 0
+
+
 def test_a_local_cluster_runs_the_sweep_by_default(tmp_path):
     sweep_file = write_sweep(tmp_path / "sweep.yaml", """scene: CUBE
 set: {simulation.duration: 0.1 s}
