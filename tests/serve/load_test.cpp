@@ -12,23 +12,30 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Simulated seconds per wall-clock second over `wall`, read by a client's state requests.
-double real_time_factor(Client& probe, std::chrono::milliseconds wall) {
-  const json a = probe.state();
+// The simulation's speed over a window of wall-clock time: simulated seconds per wall-clock
+// second (the real-time factor) and per CPU second of its own thread, and the share of a core
+// that thread got.
+struct Speed {
+  double real_time_factor = 0.0, per_cpu_second = 0.0, core_share = 0.0;
+};
+
+Speed measure(const ServerProcess& server, Client& probe, std::chrono::milliseconds wall) {
+  const double t0 = probe.state()["time"], cpu0 = server.thread_cpu_seconds("phymul-sim");
   const auto start = Clock::now();
   std::this_thread::sleep_for(wall);
-  const json b = probe.state();
+  const double t1 = probe.state()["time"], cpu1 = server.thread_cpu_seconds("phymul-sim");
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  return (b["time"].get<double>() - a["time"].get<double>()) / seconds;
+  return {(t1 - t0) / seconds, (t1 - t0) / (cpu1 - cpu0), (cpu1 - cpu0) / seconds};
 }
 
 TEST(ServeLoad, TwentyClientsForThirtySecondsLeaveTheSimulationsSpeedAndMemoryAlone) {
-  ServerProcess server({scene_path("examples/prostate/50mL_rigid.yaml"), "--port", "0", "--threads",
-                        "1", "--pace", "fast"});
+  ServerProcess server({scene_path("examples/prostate/50mL_rigid.yaml"), "--port", "0",
+                        "--threads", "1", "--pace", "fast"});
   Client probe;
   ASSERT_EQ(probe.connect(server.port()), "");
   std::this_thread::sleep_for(1s);
-  const double before = real_time_factor(probe, 5s);
+  ASSERT_GT(server.thread_cpu_seconds("phymul-sim"), 0.0);
+  const Speed before = measure(server, probe, 5s);
 
   std::vector<std::unique_ptr<Client>> clients;
   for (int k = 0; k < 20; ++k) {
@@ -37,22 +44,36 @@ TEST(ServeLoad, TwentyClientsForThirtySecondsLeaveTheSimulationsSpeedAndMemoryAl
   }
   std::this_thread::sleep_for(3s);  // connections and their buffers set up
   const long memory_start = server.rss_kib();
-  const double loaded = real_time_factor(probe, 27s);
+  const Speed loaded = measure(server, probe, 27s);
   const long memory_end = server.rss_kib();
   long fewest = clients[0]->frames();
   for (const auto& c : clients) fewest = std::min(fewest, c->frames());
   clients.clear();
-  const double after = real_time_factor(probe, 5s);
+  const Speed after = measure(server, probe, 5s);
 
-  const double alone = 0.5 * (before + after);
+  const double alone = 0.5 * (before.real_time_factor + after.real_time_factor);
+  const double alone_cpu = 0.5 * (before.per_cpu_second + after.per_cpu_second);
   std::printf(
-      "real-time factor: %.4f alone (%.4f before, %.4f after), %.4f with 20 clients "
-      "(%+.1f %%); server memory %ld -> %ld KiB; fewest frames a client got in 30 s: "
-      "%ld\n",
-      alone, before, after, loaded, 100 * (loaded / alone - 1), memory_start, memory_end, fewest);
-  EXPECT_LT(std::abs(loaded / alone - 1), 0.10);
+      "real-time factor: %.4f alone (%.4f before, %.4f after), %.4f with 20 clients (%+.1f %%)\n"
+      "per CPU second of the simulation thread: %.4f alone, %.4f with 20 clients (%+.1f %%)\n"
+      "share of a core the simulation thread got: %.2f before, %.2f with clients, %.2f after\n"
+      "server memory %ld -> %ld KiB over 27 s; fewest frames a client got: %ld\n",
+      alone, before.real_time_factor, after.real_time_factor, loaded.real_time_factor,
+      100 * (loaded.real_time_factor / alone - 1), alone_cpu, loaded.per_cpu_second,
+      100 * (loaded.per_cpu_second / alone_cpu - 1), before.core_share, loaded.core_share,
+      after.core_share, memory_start, memory_end, fewest);
+  // The streaming costs the simulation's own thread nothing (no lock it waits on, no copy
+  // beyond the snapshot's)...
+  EXPECT_LT(std::abs(loaded.per_cpu_second / alone_cpu - 1), 0.10);
+  // ...and, when nothing else wants the machine's cores, no wall-clock time either. On a
+  // machine shared with other work the clock measures that work instead: said, not checked.
+  if (std::min({before.core_share, loaded.core_share, after.core_share}) > 0.9)
+    EXPECT_LT(std::abs(loaded.real_time_factor / alone - 1), 0.10);
+  else
+    std::printf("*** NOT CHECKED: the real-time factor's change, with the simulation thread "
+                "getting under 90 %% of a core (other processes busy on this machine)\n");
   EXPECT_LT(memory_end - memory_start, 2048);  // KiB
-  EXPECT_GT(fewest, 30 * 20);                  // every client saw at least 20 frames a second
+  EXPECT_GT(fewest, 27 * 20);                  // every client saw at least 20 frames a second
 }
 
 }  // namespace

@@ -115,6 +115,28 @@ long ServerProcess::rss_kib() const {
   return -1;
 }
 
+double ServerProcess::thread_cpu_seconds(const std::string& name) const {
+  const std::filesystem::path tasks = "/proc/" + std::to_string(pid_) + "/task";
+  std::error_code ec;
+  for (const auto& task : std::filesystem::directory_iterator(tasks, ec)) {
+    std::ifstream comm(task.path() / "comm");
+    std::string got;
+    std::getline(comm, got);
+    if (got != name) continue;
+    std::ifstream stat(task.path() / "stat");
+    std::string text;
+    std::getline(stat, text);
+    // Fields after the command's closing parenthesis: state is 3rd, utime 14th, stime 15th.
+    std::istringstream rest(text.substr(text.rfind(')') + 2));
+    std::string field;
+    double ticks = 0;
+    for (int k = 3; k <= 15 && rest >> field; ++k)
+      if (k >= 14) ticks += std::stod(field);
+    return ticks / double(sysconf(_SC_CLK_TCK));
+  }
+  return -1;
+}
+
 Finished run_cli(const std::vector<std::string>& given) {
   std::string command = environment("PHYMUL_CLI");
   for (const std::string& a : given) command += " '" + a + "'";

@@ -36,6 +36,8 @@ class ServerProcess {
   // then killed).
   int stop(int signal, std::chrono::milliseconds patience = 10s);
   long rss_kib() const;  // resident memory now, /proc/PID/status
+  // CPU time (s, user and system) of its thread named `name` so far; -1 when there is none.
+  double thread_cpu_seconds(const std::string& name) const;
 
  private:
   pid_t pid_ = -1;

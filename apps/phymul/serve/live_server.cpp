@@ -52,7 +52,11 @@ LiveServer::LiveServer(LiveSimulation& sim, ServerOptions options, WebAssets ass
       slides_(obstacle_slides(sim.model())),
       snapshot_(sim.make_snapshot()),
       ws_(ServerHandlers{[this](const UpgradeRequest& r) { return accept(r); },
-                         [this](ClientId c) { open(c); }, [this](ClientId c) { clients_.erase(c); },
+                         [this](ClientId c) { open(c); },
+                         [this](ClientId c) {
+                           clients_.erase(c);
+                           sim_.set_watched(!clients_.empty());
+                         },
                          [this](ClientId c, const std::string& m) { text(c, m); },
                          [this](ClientId c, std::size_t) { binary(c); },
                          [this](const std::string& method, const std::string& resource) {
@@ -97,6 +101,7 @@ HttpReply LiveServer::http(const std::string& method, const std::string& resourc
 
 void LiveServer::open(ClientId c) {
   clients_[c] = Client{kBurst, Clock::now(), {}, 0};
+  sim_.set_watched(true);
   ws_.send_text(c, scene_json_);
   ws_.send_binary(c, mesh_bytes_.data(), mesh_bytes_.size());
 }

@@ -73,6 +73,8 @@ class LiveSimulation {
   void start();  // the stepping thread
   void stop();   // joins it
 
+  // Whether anyone is watching: the stepping thread publishes frames only then.
+  void set_watched(bool watched) { watched_ = watched; }
   // False when too many controls are waiting (the client is told to slow down).
   bool submit(const Control& control);
   // Copies the latest snapshot into `into` when it is newer than into.sequence; true if so.
@@ -120,7 +122,7 @@ class LiveSimulation {
   std::vector<Control> pending_;
   std::mutex snapshot_mutex_;
   Snapshot back_, middle_;  // back_: written by the stepping thread; middle_: the latest
-  std::atomic<bool> stop_{false};
+  std::atomic<bool> stop_{false}, watched_{false};
   std::thread thread_;
 };
 
