@@ -29,8 +29,8 @@ Speed measure(const ServerProcess& server, Client& probe, std::chrono::milliseco
 }
 
 TEST(ServeLoad, TwentyClientsForThirtySecondsLeaveTheSimulationsSpeedAndMemoryAlone) {
-  ServerProcess server({scene_path("examples/prostate/50mL_rigid.yaml"), "--port", "0",
-                        "--threads", "1", "--pace", "fast"});
+  ServerProcess server({scene_path("examples/prostate/50mL_rigid.yaml"), "--port", "0", "--threads",
+                        "1", "--pace", "fast"});
   Client probe;
   ASSERT_EQ(probe.connect(server.port()), "");
   std::this_thread::sleep_for(1s);
@@ -70,8 +70,9 @@ TEST(ServeLoad, TwentyClientsForThirtySecondsLeaveTheSimulationsSpeedAndMemoryAl
   if (std::min({before.core_share, loaded.core_share, after.core_share}) > 0.9)
     EXPECT_LT(std::abs(loaded.real_time_factor / alone - 1), 0.10);
   else
-    std::printf("*** NOT CHECKED: the real-time factor's change, with the simulation thread "
-                "getting under 90 %% of a core (other processes busy on this machine)\n");
+    std::printf(
+        "*** NOT CHECKED: the real-time factor's change, with the simulation thread "
+        "getting under 90 %% of a core (other processes busy on this machine)\n");
   EXPECT_LT(memory_end - memory_start, 2048);  // KiB
   EXPECT_GT(fewest, 27 * 20);                  // every client saw at least 20 frames a second
 }

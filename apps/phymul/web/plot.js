@@ -42,7 +42,9 @@ export class MonitorPlot {
     if (!shown.length) return;
     const t0 = Math.min(...shown.map((s) => s.t[0])), t1 = Math.max(...shown.map((s) => s.t[s.t.length - 1]));
     let lo = Math.min(...shown.map((s) => Math.min(...s.v))), hi = Math.max(...shown.map((s) => Math.max(...s.v)));
-    if (hi - lo < 1e-12) { hi += 0.5; lo -= 0.5; }
+    // At least 1 % of the values' size: a steady monitor draws flat, not as magnified noise.
+    const least = Math.max(0.01 * Math.max(Math.abs(hi), Math.abs(lo)), 1e-12);
+    if (hi - lo < least) { const mid = (hi + lo) / 2; hi = mid + least / 2; lo = mid - least / 2; }
     const x = (t) => pad + (w - pad - 4) * (t - t0) / Math.max(t1 - t0, 1e-9);
     const y = (v) => h - 14 - (h - 22) * (v - lo) / (hi - lo);
     g.fillStyle = '#aaa';
