@@ -170,7 +170,10 @@ async function main() {
     await sliderMovesProbe(page);
   } finally {
     await browser.close();
+    const exited = new Promise((resolve) => server.on('exit', (code, signal) => resolve(code ?? signal)));
     server.kill('SIGINT');
+    const code = await exited;
+    if (!screenshotOnly) check('Ctrl-C stops the server', code === 0, `exit status ${code}`);
   }
   process.exit(failures ? 1 : 0);
 }

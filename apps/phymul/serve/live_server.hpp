@@ -50,7 +50,6 @@ class LiveServer {
   std::vector<ObstacleSlide> slides_;
   std::string scene_json_, mesh_bytes_, frame_bytes_;
   Snapshot snapshot_;
-  long sent_sequence_ = 0;
   int ticks_ = 0;
   std::map<ClientId, Client> clients_;
   WebSocketServer ws_;

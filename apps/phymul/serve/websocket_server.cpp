@@ -14,16 +14,18 @@ using Endpoint = websocketpp::server<websocketpp::config::asio>;
 using Handle = websocketpp::connection_hdl;
 
 struct WebSocketServer::Impl {
+  // Declared before the asio objects, so destroyed after them: destroying those may still
+  // close connections, whose handlers read these.
   ServerHandlers handlers;
+  std::map<ClientId, Handle> clients;
+  std::map<Handle, ClientId, std::owner_less<Handle>> ids;
+  ClientId next_id = 1;
+  bool stopping = false, signalled = false, dying = false;
+  std::chrono::milliseconds tick{16};
   asio::io_context io;
   Endpoint endpoint;
   asio::steady_timer ticker{io}, deadline{io};
   asio::signal_set signals{io, SIGINT, SIGTERM};
-  std::map<ClientId, Handle> clients;
-  std::map<Handle, ClientId, std::owner_less<Handle>> ids;
-  ClientId next_id = 1;
-  bool stopping = false, signalled = false;
-  std::chrono::milliseconds tick{16};
 
   ClientId id_of(const Handle& h) const {
     const auto it = ids.find(h);
@@ -38,7 +40,7 @@ struct WebSocketServer::Impl {
   }
   void forget(const Handle& h) {
     const ClientId id = id_of(h);
-    if (id == 0) return;
+    if (id == 0 || dying) return;
     ids.erase(h);
     clients.erase(id);
     if (handlers.close) handlers.close(id);
@@ -108,7 +110,9 @@ WebSocketServer::WebSocketServer(ServerHandlers handlers, std::size_t max_messag
   impl_->endpoint.set_max_http_body_size(max_message_bytes);
 }
 
-WebSocketServer::~WebSocketServer() = default;
+// The connections still open go with the endpoint, telling no one: the handlers' owner may be
+// half destroyed by now.
+WebSocketServer::~WebSocketServer() { impl_->dying = true; }
 
 int WebSocketServer::listen(const std::string& host, int port) {
   asio::error_code ec;
