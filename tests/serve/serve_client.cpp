@@ -155,6 +155,12 @@ Client::Client() {
   endpoint_.clear_error_channels(websocketpp::log::elevel::all);
   endpoint_.init_asio();
   endpoint_.set_max_message_size(256 << 20);
+  endpoint_.set_socket_init_handler([this](websocketpp::connection_hdl, asio::ip::tcp::socket& s) {
+    asio::error_code ec;  // opened here so that the buffer is set before the handshake's window
+    if (receive_buffer_ <= 0) return;
+    s.open(asio::ip::tcp::v4(), ec);
+    s.set_option(asio::socket_base::receive_buffer_size(receive_buffer_), ec);
+  });
   endpoint_.set_open_handler([this](websocketpp::connection_hdl) {
     std::lock_guard lock(mutex_);
     open_ = true;
@@ -185,6 +191,13 @@ Client::Client() {
       ++frames_;
     }
     changed_.notify_all();
+    if (stall_.count() > 0 && frames_ > 0) {  // the thread that reads the socket stops here
+      const auto stall = stall_;
+      stall_ = std::chrono::milliseconds(0);
+      mutex_.unlock();
+      std::this_thread::sleep_for(stall);
+      mutex_.lock();
+    }
   });
 }
 

@@ -64,6 +64,10 @@ class Client {
   // why not (the HTTP status or the error).
   std::string connect(int port, const std::string& resource = "/ws",
                       const std::vector<std::pair<std::string, std::string>>& headers = {});
+  // A slow client: a small socket receive buffer (before connect), and a stall of its thread
+  // at the next frame (it reads nothing meanwhile).
+  void set_receive_buffer(int bytes) { receive_buffer_ = bytes; }
+  void stall_at_next_frame(std::chrono::milliseconds stall) { stall_ = stall; }
   void send_text(const std::string& text);
   void send_binary(const std::string& bytes);
   // The first text message since the last call that satisfies `pick` (messages before it are
@@ -92,6 +96,8 @@ class Client {
   bool open_ = false, failed_ = false;
   std::string fail_reason_;
   int next_id_ = 1;
+  int receive_buffer_ = 0;
+  std::chrono::milliseconds stall_{0};
 };
 
 }  // namespace phymul::testing
