@@ -14,8 +14,10 @@ const screenshotOnly = option('--screenshot');
 const CHROMIUM = process.env.PHYMUL_CHROMIUM || '/usr/bin/chromium';
 const BACKGROUND = [0x20, 0x24, 0x2b];
 
+let started = null;  // the server, stopped whatever way this script ends
 function skip(why) {
   console.log(`\n*** SKIPPED: ${why}\n*** the live view's browser tests did not run\n`);
+  if (started) started.kill('SIGINT');
   process.exit(SKIP);
 }
 
@@ -32,6 +34,7 @@ const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 
 function startServer() {
   const server = spawn(cli, ['serve', scene, '--port', '0', '--threads', '1'], { stdio: ['ignore', 'pipe', 'inherit'] });
+  started = server;
   return new Promise((resolve, reject) => {
     let out = '';
     server.stdout.on('data', (d) => {
@@ -180,5 +183,6 @@ async function main() {
 
 main().catch((e) => {
   console.log(`FAIL ${e.stack}`);
+  if (started) started.kill('SIGINT');
   process.exit(1);
 });
