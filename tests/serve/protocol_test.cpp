@@ -251,6 +251,21 @@ TEST(ServeProtocol, PressureAndTargetVolumeFollowTheirControls) {
   EXPECT_NEAR(state["monitors"]["block pressure (kPa)"].get<double>(), 0.15, 1e-12);
 }
 
+TEST(ServeProtocol, AForceOnANodeMovesItAlongTheForceUntilRemoved) {
+  Served s;
+  const int node = kBottomAside;
+  EXPECT_TRUE(is_type(
+      s.client.request({{"op", "set_force"}, {"node", node}, {"force", {0.0, 0.0, -0.02}}}), "ok"));
+  std::this_thread::sleep_for(1500ms);
+  const json pushed = s.client.state(node)["node"];
+  const double down = pushed["rest"][2].get<double>() - pushed["position"][2].get<double>();
+  EXPECT_GT(down, 5e-4);
+  s.client.request({{"op", "set_force"}, {"node", node}, {"force", {0.0, 0.0, 0.0}}});
+  std::this_thread::sleep_for(1500ms);
+  const json back = s.client.state(node)["node"];
+  EXPECT_LT(norm(back["position"], back["rest"]), 0.2 * down);
+}
+
 TEST(ServeProtocol, ResetPutsTheRunBackAtTimeZero) {
   Served s;
   std::this_thread::sleep_for(300ms);

@@ -47,15 +47,27 @@ export function buildControls(scene, connection, places) {
     places.loads.append(label);
     return input;
   };
-  if (scene.pressures.length || scene.volumes.length) heading(places.loads, 'Loads');
+  heading(places.loads, 'Loads');
   const pressures = scene.pressures.map((p, k) =>
     field(`${p.name} pressure`, 'kPa', 0, (v) => connection.send({ op: 'set_pressure', load: k, value: v * 1e3 })));
   const volumes = scene.volumes.map((v, k) =>
     field(`${v.name} volume`, 'mL', (v.rest * 1e6).toFixed(1),
       (x) => connection.send({ op: 'set_target_volume', object: k, value: x * 1e-6 })));
 
+  // A constant force on one node (the last one dragged, or any id): a load changed live.
+  const label = document.createElement('label');
+  const node = Object.assign(document.createElement('input'), { type: 'number', min: 0, max: scene.nodes - 1, step: 1, value: 0 });
+  const force = [0, 0, 0].map(() => Object.assign(document.createElement('input'), { type: 'number', step: 'any', value: 0 }));
+  node.style.width = '52px';
+  force.forEach((f) => { f.style.width = '44px'; });
+  const apply = Object.assign(document.createElement('button'), { textContent: 'apply' });
+  apply.onclick = () => connection.send({ op: 'set_force', node: Number(node.value), force: force.map((f) => Number(f.value)) });
+  label.append('force on node ', node, ' N ', ...force, apply);
+  places.loads.append(label);
+
   // Status: fields and sliders follow the run unless the user is changing them.
   return {
+    picked(id) { node.value = id; },
     status(m) {
       sliders.forEach((s, k) => {
         const t = m.obstacles[k].translation;

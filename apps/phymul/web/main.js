@@ -58,6 +58,7 @@ canvas.addEventListener('pointerdown', (e) => {
   view.controls.enabled = false;
   canvas.setPointerCapture(e.pointerId);
   page.drag = { node: hit.node, through: hit.point, target: hit.point.toArray() };
+  if (controls) controls.picked(hit.node);
   connection.send({ op: 'drag', node: hit.node, target: page.drag.target });
 });
 canvas.addEventListener('pointermove', (e) => {
