@@ -39,6 +39,9 @@ TEST(ServeCli, BadArgumentsAndBadScenesExitWithAClearError) {
   f = run_cli({"serve", scene_path("tests/data/bad_scenes/negative_stiffness.yaml")});
   EXPECT_EQ(f.exit_code, 1);
   EXPECT_NE(f.output.find("negative_stiffness.yaml:"), std::string::npos) << f.output;
+  f = run_cli({"serve", scene_path("examples/compressed_cube.yaml")});
+  EXPECT_EQ(f.exit_code, 1);
+  EXPECT_NE(f.output.find("is a static scene"), std::string::npos) << f.output;
   f = run_cli({"serve", "/nonexistent/scene.yaml"});
   EXPECT_EQ(f.exit_code, 1);
   EXPECT_NE(f.output.find("/nonexistent/scene.yaml"), std::string::npos) << f.output;
