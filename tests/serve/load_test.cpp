@@ -1,8 +1,9 @@
-// phymul serve under load: 20 clients watching the prostate scene for 30 s on 127.0.0.1. The
-// simulation runs as fast as it can (--pace fast), so any time the streaming took from it
-// would show in its speed; the server's memory must stay flat.
+// phymul serve under load (these tests run alone: they measure speeds): 20 clients watching
+// the prostate scene for 30 s on 127.0.0.1, and a client that stops reading. The simulation
+// keeps its speed, the server its memory.
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <memory>
 
 #include "serve_client.hpp"
@@ -75,6 +76,52 @@ TEST(ServeLoad, TwentyClientsForThirtySecondsLeaveTheSimulationsSpeedAndMemoryAl
         "getting under 90 %% of a core (other processes busy on this machine)\n");
   EXPECT_LT(memory_end - memory_start, 2048);  // KiB
   EXPECT_GT(fewest, 27 * 20);                  // every client saw at least 20 frames a second
+}
+
+// A client that stops reading (its thread stalled, a 4 KiB socket buffer) for 12 s while
+// another watches: the simulation keeps its pace, the other client its frame rate, the
+// server its memory, and the stalled client, once it reads again, gets the latest frames,
+// not all the ones it missed (the server keeps a few frames' worth in the kernel for it).
+TEST(ServeLoad, AStalledClientSlowsNothingAndGetsTheLatestFramesAfter) {
+  ServerProcess server(
+      {scene_path("examples/prostate/50mL_rigid.yaml"), "--port", "0", "--threads", "1"});
+  Client stalled, watching;
+  stalled.set_receive_buffer(4096);
+  ASSERT_EQ(stalled.connect(server.port()), "");
+  ASSERT_EQ(watching.connect(server.port()), "");
+  std::this_thread::sleep_for(1s);
+  // The pace before (real time, or what a sanitized build manages).
+  const double p0 = watching.state()["time"];
+  std::this_thread::sleep_for(3s);
+  const double pace_before = (watching.state()["time"].get<double>() - p0) / 3.0;
+  const long memory_before = server.rss_kib();
+  const long frames_before = watching.frames();
+  const double t0 = watching.state()["time"];
+  stalled.stall_at_next_frame(12s);
+  const auto start = std::chrono::steady_clock::now();
+  std::this_thread::sleep_for(11s);
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double simulated = watching.state()["time"].get<double>() - t0;
+  const double rate = double(watching.frames() - frames_before) / wall;
+  const long memory_during = server.rss_kib();
+  // The stall over, it reads what the kernel's buffers held (about 4 MiB) and then the latest.
+  std::this_thread::sleep_for(3s);
+  std::printf(
+      "pace %.3f before, %.3f during the stall; the watching client got %.1f frames a second; "
+      "frames: stalled %ld, watching %ld; server memory %ld -> %ld KiB\n",
+      pace_before, simulated / wall, rate, stalled.frames(), watching.frames(), memory_before,
+      memory_during);
+  EXPECT_NEAR(simulated / wall / pace_before, 1.0, 0.15);
+  EXPECT_GT(rate, 30.0);
+  EXPECT_LT(memory_during - memory_before, 2048);
+  EXPECT_LT(stalled.frames(), 0.8 * watching.frames());
+  // What it shows now is the run now, not seconds old frames queued for it.
+  const std::string frame = stalled.last_frame();
+  double shown = 0;
+  std::memcpy(&shown, frame.data() + 8, 8);
+  EXPECT_LT(watching.state()["time"].get<double>() - shown, 0.5);
+  EXPECT_EQ(stalled.close_code(), 0);
 }
 
 }  // namespace

@@ -26,6 +26,14 @@ std::string query_value(const std::string& resource, const std::string& key) {
   return "";
 }
 
+// A few frames' worth (at least 64 KiB): a client that stops reading has at most that much
+// waiting in the kernel, then gets the latest frame when it reads again.
+size_t send_buffer(const LiveSimulation& sim) {
+  const size_t frame =
+      24 + 16 * size_t(sim.model().node_count()) + 12 * sim.model().obstacles.size();
+  return std::max<size_t>(4 * frame, 64 << 10);
+}
+
 std::string path_of(const std::string& resource) { return resource.substr(0, resource.find('?')); }
 
 // Compares in a time that does not depend on where the strings first differ.
@@ -63,7 +71,7 @@ LiveServer::LiveServer(LiveSimulation& sim, ServerOptions options, WebAssets ass
                            return http(method, resource);
                          },
                          [this] { tick(); }},
-          kMaxMessageBytes) {
+          kMaxMessageBytes, send_buffer(sim)) {
   scene_json_ = scene_message(sim_, surface_, slides_);
   encode_mesh(sim_.model(), surface_, mesh_bytes_);
   if (sim_.latest(snapshot_)) encode_frame(snapshot_, frame_bytes_);

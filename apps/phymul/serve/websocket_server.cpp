@@ -102,10 +102,19 @@ void WebSocketServer::Impl::install() {
   });
 }
 
-WebSocketServer::WebSocketServer(ServerHandlers handlers, std::size_t max_message_bytes)
+WebSocketServer::WebSocketServer(ServerHandlers handlers, std::size_t max_message_bytes,
+                                 std::size_t send_buffer_bytes)
     : impl_(std::make_unique<Impl>()) {
   impl_->handlers = std::move(handlers);
   impl_->install();
+  // Once accepted (the socket exists from then on): without this the kernel grows a send
+  // buffer to megabytes, seconds of stale frames for a client that reads slowly.
+  Impl& s = *impl_;
+  s.endpoint.set_tcp_post_init_handler([&s, send_buffer_bytes](Handle h) {
+    asio::error_code ec;
+    s.endpoint.get_con_from_hdl(h)->get_socket().set_option(
+        asio::socket_base::send_buffer_size(int(send_buffer_bytes)), ec);
+  });
   impl_->endpoint.set_max_message_size(max_message_bytes);
   impl_->endpoint.set_max_http_body_size(max_message_bytes);
 }

@@ -39,8 +39,11 @@ struct ServerHandlers {
 
 class WebSocketServer {
  public:
-  // Messages over max_message_bytes close their connection (1009, "message too big").
-  WebSocketServer(ServerHandlers handlers, std::size_t max_message_bytes);
+  // Messages over max_message_bytes close their connection (1009, "message too big"). Each
+  // connection's kernel send buffer is send_buffer_bytes: what a client that stops reading
+  // can have waiting for it there, beyond the server's own queue.
+  WebSocketServer(ServerHandlers handlers, std::size_t max_message_bytes,
+                  std::size_t send_buffer_bytes);
   ~WebSocketServer();
   WebSocketServer(const WebSocketServer&) = delete;
   WebSocketServer& operator=(const WebSocketServer&) = delete;
