@@ -60,11 +60,14 @@ int main(int argc, char** argv) {
       "{\n  \"scene\": \"%s\",\n  \"seconds_per_phase\": %.1f,\n"
       "  \"real_time_factor\": %.4f,\n"
       "  \"stepping_share_of_a_core\": %.4f,\n"
+      "  \"stepping_share_of_a_core_one_client\": %.4f,\n"
       "  \"network_thread_share_of_a_core_no_client\": %.5f,\n"
+      "  \"network_thread_share_of_a_core_one_client\": %.5f,\n"
       "  \"frames_per_second_to_the_client\": %.1f,\n"
       "  \"one_client_share_of_a_core\": %.5f,\n"
       "  \"one_client_share_of_the_stepping\": %.5f\n}\n",
-      argv[2], seconds, watched.simulated / watched.wall, stepping, alone.network_cpu / alone.wall,
+      argv[2], seconds, watched.simulated / watched.wall, stepping, watched.sim_cpu / watched.wall,
+      alone.network_cpu / alone.wall, watched.network_cpu / watched.wall,
       double(watched.frames) / watched.wall, streaming, streaming / stepping);
   return 0;
 }
