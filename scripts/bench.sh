@@ -39,3 +39,7 @@ PYTHONPATH="$root/$build/python" /usr/bin/python3 "$root/bench/python_bench.py" 
 # sample beyond its run (bench/results_sweep.json).
 PYTHONPATH="$root/$build/python" /usr/bin/python3 "$root/bench/sweep_bench.py" \
   "$root/bench/results_sweep.json"
+# The live view's streaming: one client's cost at 60 frames a second on the prostate scene in
+# real time (bench/results_serve.json).
+OMP_NUM_THREADS=1 "$root/$build/bench/phymul_serve_bench" "$root/$build/phymul" \
+  "$root/examples/prostate/50mL_rigid.yaml" 15 | tee "$root/bench/results_serve.json"

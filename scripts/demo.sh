@@ -30,6 +30,15 @@ for sweep in "$root"/examples/sweeps/*.yaml; do
   rm -rf "$results/sweeps/$name"
   "$root/$build/phymul" sweep "$sweep" -o "$results/sweeps/$name"
 done
+# The live view (docs/live-view.md): phymul serve on the 50 mL rigid-probe prostate scene, its
+# page in headless chromium, a screenshot once the probe has pushed (about 1.5 s in).
+echo "== live view (phymul serve) of the prostate scene, in headless chromium"
+mkdir -p "$results/live_view"
+live=0
+NODE_PATH="$root/$build/web/node_modules" node "$root/tests/serve/browser_test.cjs" \
+  "$root/$build/phymul" "$root/examples/prostate/50mL_rigid.yaml" \
+  --screenshot "$results/live_view/prostate_50mL_rigid.png" --seconds 1.5 || live=$?
+[ $live -eq 0 ] || echo "warning: no live view screenshot (exit $live: see above)" >&2
 echo
 echo "Results are in $results/<example>/:"
 echo "  <example>.png            the last frame, coloured by displacement (rest shape in grey)"
@@ -45,3 +54,4 @@ echo "prostate.json, one scene (.yaml) and .pvd series per filling and probe, re
 echo "and the sweeps in $results/sweeps/<sweep>/: results.csv (a row per sample), summary.png"
 echo "(prostate_sensitivity: the prostate's deformation against its stiffness, a curve per"
 echo "bladder filling, a panel per probe force), samples/<id>/ (each sample's scene and results)"
+echo "and the live view's page on the prostate scene: $results/live_view/prostate_50mL_rigid.png"

@@ -5,12 +5,15 @@ set -euo pipefail
 build_pkgs=(cmake make g++ libeigen3-dev libyaml-cpp-dev libcli11-dev libfmt-dev libgmsh-dev
   libgtest-dev libgmock-dev libbenchmark-dev python3-meshio python3-numpy
   pybind11-dev python3-dev python3-pytest python3-yaml python3-distributed python3-pandas
-  python3-matplotlib)
+  python3-matplotlib libwebsocketpp-dev libasio-dev nlohmann-json3-dev)
 demo_pkgs=(python3-vtk9 xvfb xauth)
 # The sanitized build and the fuzzers (clang, its sanitizer and libFuzzer runtimes, its OpenMP).
 sanitize_pkgs=(clang-14 libclang-rt-14-dev libomp-14-dev)
-# Wanted but not required: the tests that need them say loudly that they were skipped.
-optional_pkgs=(calculix-ccx)
+# Wanted but not required: the tests that need them say loudly that they were skipped (the
+# live view's page needs node, npm and esbuild to build, chromium to test). "package:command":
+# present when the command is, whoever installed it (nodesource's nodejs carries its own npm,
+# which Debian's npm package conflicts with).
+optional_pkgs=(calculix-ccx nodejs:node npm:npm esbuild:esbuild chromium:chromium)
 case "${1:-build}" in
   build) want=("${build_pkgs[@]}") ;;
   demo) want=("${build_pkgs[@]}" "${demo_pkgs[@]}") ;;
@@ -21,7 +24,11 @@ esac
 missing_of() {
   local p
   for p in "$@"; do
-    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || echo "$p"
+    if [[ $p == *:* ]]; then
+      command -v "${p#*:}" >/dev/null || echo "${p%%:*}"
+    else
+      dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || echo "$p"
+    fi
   done
 }
 mapfile -t missing < <(missing_of "${want[@]}")
@@ -43,8 +50,8 @@ if [ ${#missing[@]} -gt 0 ]; then
   echo "installing: ${missing[*]}"
   apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
-if [ ${#missing_optional[@]} -gt 0 ]; then
-  echo "installing (optional): ${missing_optional[*]}"
-  apt-get install -y -qq --no-install-recommends "${missing_optional[@]}" >/dev/null ||
-    echo "warning: could not install ${missing_optional[*]}; the tests that need them will be skipped" >&2
-fi
+for p in "${missing_optional[@]}"; do  # one at a time: one that fails does not stop the rest
+  echo "installing (optional): $p"
+  apt-get install -y -qq --no-install-recommends "$p" >/dev/null ||
+    echo "warning: could not install $p; the tests that need it will be skipped" >&2
+done

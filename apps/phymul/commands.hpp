@@ -17,5 +17,6 @@ Command add_calibrate_command(CLI::App& parent);  // stiffness from Young's modu
 Command add_prostate_command(CLI::App& parent);   // the prostate study
 Command add_sweep_command(CLI::App& parent);      // parameter sweeps (Python, Dask)
 Command add_mesh_command(CLI::App& parent);       // closed surface -> tetrahedra
+Command add_serve_command(CLI::App& parent);      // the live view in the browser
 
 }  // namespace phymul::cli

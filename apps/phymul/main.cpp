@@ -172,6 +172,7 @@ int main(int argc, char** argv) {
   const auto prostate = phymul::cli::add_prostate_command(app);
   const auto sweep = phymul::cli::add_sweep_command(app);
   const auto mesh = phymul::cli::add_mesh_command(app);
+  const auto serve = phymul::cli::add_serve_command(app);
 
   // CLI11 alone reports an unknown command as "A subcommand is required": name it instead.
   if (argc > 1 && argv[1][0] != '-') {
@@ -203,6 +204,7 @@ int main(int argc, char** argv) {
     if (*prostate.app) return prostate.run();
     if (*sweep.app) return sweep.run();
     if (*mesh.app) return mesh.run();
+    if (*serve.app) return serve.run();
     std::cout << phymul::scene_reference_markdown();
     return 0;
   } catch (const std::exception& e) {
