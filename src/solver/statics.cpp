@@ -144,10 +144,11 @@ StaticResult continue_relax(const Model& model, Data& d, double load_time, long 
       break;
     }
     if (p.step_iterations >= max_iterations) break;
-    if (model.settings.integrator == Integrator::verlet)
-      step_verlet(model, d, d.dt, load_time);
-    else
+    // (Relaxation is explicit pseudo-dynamics: the implicit integrator relaxes by Verlet.)
+    if (model.settings.integrator == Integrator::newton_cotes)
       step_newton_cotes(model, d, d.dt, load_time);
+    else
+      step_verlet(model, d, d.dt, load_time);
     ++p.step_iterations;
     ++d.step;
     checked_step(model, d, d.time, load_time);
