@@ -19,8 +19,7 @@ using namespace phymul;
 double mechanical_energy(const Model& model, const Data& d) {
   double e = kinetic_energy(model, d) + d.shape_memory_energy;
   for (int i = 0; i < model.node_count(); ++i)
-    e -= model.mass[size_t(i)] *
-         model.gravity.dot(d.x[size_t(i)] - model.rest_position[size_t(i)]);
+    e -= model.mass[size_t(i)] * model.gravity.dot(d.x[size_t(i)] - model.rest_position[size_t(i)]);
   return e;
 }
 

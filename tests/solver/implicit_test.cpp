@@ -102,8 +102,7 @@ TEST(ImplicitSteps, ComeToRestAtTheStaticEquilibrium) {
   EXPECT_GT(sag, 1e-3);
   const double gap = largest_gap(sim.data().x, relaxed.data().x);
   EXPECT_LT(gap, 1e-6 * sag) << gap / sag;
-  std::printf("implicit against static equilibrium: %.3g of the largest displacement\n",
-              gap / sag);
+  std::printf("implicit against static equilibrium: %.3g of the largest displacement\n", gap / sag);
   EXPECT_LT(sim.max_residual_force(), 1e-10);
 }
 
