@@ -29,8 +29,10 @@ struct ImplicitSystem {
   std::array<int, 3> unknowns{0, 0, 0};
   // Per axis: its factor; axes holding the same nodes share one.
   std::array<std::shared_ptr<const ImplicitFactor>, 3> factor;
-  // Per axis, unknowns long: the residual, the correction, the permuted scratch.
-  std::array<Eigen::VectorXd, 3> residual, correction, permuted;
+  // Per axis, unknowns long: the residual and the correction.
+  std::array<Eigen::VectorXd, 3> residual, correction;
+  // The solves' right-hand sides, row by row in the factor's order (solver/implicit_step.cpp).
+  std::vector<double> block;
   // Per volume constraint and axis: its gradient over the unknowns and P^-1 times it.
   std::vector<std::array<Eigen::VectorXd, 3>> gradient, solved_gradient;
   // The last step: global solves taken, and the largest residual nodal force (N) at its end.

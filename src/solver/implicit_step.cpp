@@ -139,7 +139,6 @@ void prepare(const Model& model, ImplicitSystem& s, double h) {
     const int m = s.unknowns[size_t(a)];
     s.residual[size_t(a)].setZero(m);
     s.correction[size_t(a)].setZero(m);
-    s.permuted[size_t(a)].setZero(m);
   }
   s.gradient.resize(model.volumes.size());
   s.solved_gradient.resize(model.volumes.size());
@@ -148,17 +147,91 @@ void prepare(const Model& model, ImplicitSystem& s, double h) {
       s.gradient[l][size_t(a)].setZero(s.unknowns[size_t(a)]);
       s.solved_gradient[l][size_t(a)].setZero(s.unknowns[size_t(a)]);
     }
+  size_t most = 0;
+  for (int a = 0; a < 3; ++a) most = std::max(most, size_t(s.unknowns[size_t(a)]));
+  s.block.assign(most * 3 * (1 + model.volumes.size()), 0.0);
   s.h = h;
 }
 
-// y = P^-1 b on one axis, in place (b in y); allocation-free.
-void solve(ImplicitSystem& s, int a, Eigen::VectorXd& y) {
-  const ImplicitFactor& f = *s.factor[size_t(a)];
-  Eigen::VectorXd& t = s.permuted[size_t(a)];
-  for (Eigen::Index k = 0; k < y.size(); ++k) t[f.position[size_t(k)]] = y[k];
-  f.llt.matrixL().solveInPlace(t);
-  f.llt.matrixU().solveInPlace(t);
-  for (Eigen::Index k = 0; k < y.size(); ++k) y[k] = t[f.position[size_t(k)]];
+// X = P^-1 X for k right-hand sides at once, X row-major in the permuted order (row p's k
+// values at x + p k): one pass over the factor for all of them, the k values of a row
+// contiguous (an axis's residual and each volume's gradient, for each axis sharing the
+// factor), where k separate solves would read the factor k times.
+// K: the count at compile time (unrolled), or 0 for any count k.
+template <int K>
+void solve_block(const ImplicitFactor& f, double* __restrict x, int count) {
+  const int k = K > 0 ? K : count;
+  const Eigen::SparseMatrix<double>& L = f.llt.matrixL().nestedExpression();
+  const int n = int(L.cols());
+  const int* __restrict start = L.outerIndexPtr();
+  const int* __restrict row = L.innerIndexPtr();
+  const double* __restrict value = L.valuePtr();
+  for (int j = 0; j < n; ++j) {  // L Y = X; each column's diagonal comes first
+    double* __restrict xj = x + size_t(j) * size_t(k);
+    const double inverse = 1.0 / value[start[j]];
+    for (int c = 0; c < k; ++c) xj[c] *= inverse;
+    for (int e = start[j] + 1; e < start[j + 1]; ++e) {
+      double* __restrict xi = x + size_t(row[e]) * size_t(k);
+      const double l = value[e];
+      for (int c = 0; c < k; ++c) xi[c] -= l * xj[c];
+    }
+  }
+  for (int j = n - 1; j >= 0; --j) {  // L^T X = Y
+    double* __restrict xj = x + size_t(j) * size_t(k);
+    for (int e = start[j] + 1; e < start[j + 1]; ++e) {
+      const double* __restrict xi = x + size_t(row[e]) * size_t(k);
+      const double l = value[e];
+      for (int c = 0; c < k; ++c) xj[c] -= l * xi[c];
+    }
+    const double inverse = 1.0 / value[start[j]];
+    for (int c = 0; c < k; ++c) xj[c] *= inverse;
+  }
+}
+
+// P^-1 applied to every axis's residual (into correction) and every volume's gradient (into
+// solved_gradient), the axes that share a factor together.
+void solve_all(const Model& model, ImplicitSystem& s) {
+  const int per_axis = 1 + int(model.volumes.size());
+  for (int a = 0; a < 3; ++a) {
+    if (a > 0 && (s.factor[size_t(a)] == s.factor[0] || (a == 2 && s.factor[2] == s.factor[1])))
+      continue;  // solved with the first axis that shares its factor
+    int axes[3], count = 0;
+    for (int b = a; b < 3; ++b)
+      if (s.factor[size_t(b)] == s.factor[size_t(a)]) axes[count++] = b;
+    const ImplicitFactor& f = *s.factor[size_t(a)];
+    const int k = count * per_axis, m = s.unknowns[size_t(a)];
+    double* x = s.block.data();
+    for (int u = 0; u < m; ++u) {
+      double* r = x + size_t(f.position[size_t(u)]) * size_t(k);
+      for (int q = 0; q < count; ++q) {
+        const size_t b = size_t(axes[q]);
+        r[q * per_axis] = s.residual[b][u];
+        for (int l = 1; l < per_axis; ++l) r[q * per_axis + l] = s.gradient[size_t(l - 1)][b][u];
+      }
+    }
+    switch (k) {  // one axis or three, without or with one or two volume constraints
+      case 3:
+        solve_block<3>(f, x, k);
+        break;
+      case 6:
+        solve_block<6>(f, x, k);
+        break;
+      case 9:
+        solve_block<9>(f, x, k);
+        break;
+      default:
+        solve_block<0>(f, x, k);
+    }
+    for (int u = 0; u < m; ++u) {
+      const double* r = x + size_t(f.position[size_t(u)]) * size_t(k);
+      for (int q = 0; q < count; ++q) {
+        const size_t b = size_t(axes[q]);
+        s.correction[b][u] = r[q * per_axis];
+        for (int l = 1; l < per_axis; ++l)
+          s.solved_gradient[size_t(l - 1)][b][u] = r[q * per_axis + l];
+      }
+    }
+  }
 }
 
 // Sums a node field's free axes into the unknowns (a doubled group's members add up).
@@ -228,19 +301,12 @@ double largest_residual(const Model& model, ImplicitSystem& s) {
 // The correction P^-1 (r - G^T mu), mu such that each volume reaches its target to first
 // order (G the volumes' gradients over the unknowns).
 void global_step(const Model& model, Data& d, ImplicitSystem& s, double load_time) {
-  for (int a = 0; a < 3; ++a) {
-    s.correction[size_t(a)] = s.residual[size_t(a)];
-    solve(s, a, s.correction[size_t(a)]);
-  }
+  solve_all(model, s);
   const int volumes = int(model.volumes.size());
   if (volumes == 0) return;
   Small schur(volumes, volumes);
   SmallVector rate(volumes);
   for (int l = 0; l < volumes; ++l) {
-    for (int a = 0; a < 3; ++a) {
-      s.solved_gradient[size_t(l)][size_t(a)] = s.gradient[size_t(l)][size_t(a)];
-      solve(s, a, s.solved_gradient[size_t(l)][size_t(a)]);
-    }
     const VolumeConstraint& c = model.volumes[size_t(l)];
     const double gap =
         target_volume(model, d.controls, size_t(l), load_time) - enclosed_volume(d.x, c.triangles);
