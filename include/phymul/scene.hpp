@@ -46,9 +46,10 @@ enum class Integrator { verlet, newton_cotes, implicit };
 enum class SolveMode { dynamic, static_equilibrium };
 enum class FrameMode { polar, frame };
 enum class Relaxation { fire, kinetic, viscous };
-// How static mode finds the equilibrium: damped pseudo-dynamics of any model, or the reference
-// finite elements' Newton method (fem objects only; solver/newton_run.hpp).
-enum class StaticSolver { relaxation, newton };
+// How static mode finds the equilibrium: damped pseudo-dynamics of any model, the reference
+// finite elements' Newton method (fem objects only; solver/newton_run.hpp), or the implicit
+// steps' local/global iterations with the inertia relaxed (what integrator: implicit takes).
+enum class StaticSolver { relaxation, newton, implicit };
 // What dt: auto takes its share of: the Gershgorin bound on the shape-memory stiffness, or
 // the highest frequency found by power iteration on the linearised forces (Simulator).
 enum class DtEstimate { gershgorin, power };

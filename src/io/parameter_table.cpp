@@ -275,10 +275,13 @@ std::vector<Parameter> simulation_parameters() {
       {.section = "simulation",
        .name = "solver",
        .kind = Kind::choice,
-       .choices = {"relaxation", "newton"},
+       .choices = {"relaxation", "newton", "implicit"},
        .default_value = "relaxation",
        .when = {kStatic},
-       .doc = "Static mode: `relaxation` (damped pseudo-dynamics, any model) or `newton` (the "
+       .doc = "Static mode: `relaxation` (damped pseudo-dynamics, any model), `implicit` (backward-"
+              "Euler steps of 1000 times dt from rest, each solved by the implicit integrator's "
+              "local/global iterations to `tolerance` or 20 solves, until the residual is below "
+              "`tolerance`; the implicit integrator's objects and loads) or `newton` (the "
               "reference finite elements: fully integrated hexahedra with mean dilatation or "
               "tetrahedra, Newton with a line search and a sparse Cholesky, `load_steps` "
               "scaling the end-time loads). Newton takes `model: fem` objects, stitches, "

@@ -261,7 +261,9 @@ SimulationSpec SceneBuilder::simulation(SectionReader& reader) {
                {"kinetic", Relaxation::kinetic},
                {"viscous", Relaxation::viscous}});
   reader.read("solver", spec.solver,
-              {{"relaxation", StaticSolver::relaxation}, {"newton", StaticSolver::newton}});
+              {{"relaxation", StaticSolver::relaxation},
+               {"newton", StaticSolver::newton},
+               {"implicit", StaticSolver::implicit}});
   spec.solver_loc = reader.value_loc("solver").value_or(SourceLoc{});
   reader.done();
   return spec;

@@ -15,6 +15,13 @@ std::string implicit_at(const SimulationSpec& s) {
   return s.integrator_loc.line > 0 ? fmt::format(" (line {})", s.integrator_loc.line) : "";
 }
 
+// The same for `solver: implicit` in static mode.
+std::string implicit_static_at(const SimulationSpec& s) {
+  return s.solver_loc.line > 0
+             ? fmt::format(" (the implicit static solver, line {})", s.solver_loc.line)
+             : "";
+}
+
 constexpr const char* kTakes =
     "it takes elastic shape-memory objects with gravity, 'force' loads, pressures, 'fixed' and "
     "'displacement' constraints, stitches, doubled nodes and volume constraints; use "
@@ -32,8 +39,9 @@ void refuse_all(const std::vector<Spec>& specs, const char* what, const std::str
 
 void check_implicit_scene(const Scene& scene, std::vector<Diagnostic>& problems) {
   const SimulationSpec& s = scene.simulation;
-  if (s.integrator != Integrator::implicit || s.mode != SolveMode::dynamic) return;
-  const std::string at = implicit_at(s);
+  const bool statics = s.mode == SolveMode::static_equilibrium;
+  if (statics ? s.solver != StaticSolver::implicit : s.integrator != Integrator::implicit) return;
+  const std::string at = statics ? implicit_static_at(s) : implicit_at(s);
   for (const ObjectSpec& o : scene.objects) {
     if (o.type != ObjectType::elastic)
       problems.push_back(

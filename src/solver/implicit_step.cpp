@@ -337,6 +337,12 @@ double residual_at(const Model& model, Data& d, ImplicitSystem& s, double h) {
 }  // namespace
 
 void step_implicit(const Model& model, Data& d, double h, double load_time) {
+  step_implicit(model, d, h, load_time, model.settings.implicit_iterations,
+                model.settings.implicit_tolerance);
+}
+
+void step_implicit(const Model& model, Data& d, double h, double load_time, int most,
+                   double tolerance) {
   Workspace& w = *d.work;
   ImplicitSystem& s = w.implicit;
   if (!(s.h == h)) prepare(model, s, h);
@@ -347,8 +353,6 @@ void step_implicit(const Model& model, Data& d, double h, double load_time) {
     d.x[size_t(i)] += h * d.v[size_t(i)];  // the first guess: the inertial position
   }
   apply_position_constraints(model, d.controls, w, d.x, load_time, w.f_start);
-  const int most = model.settings.implicit_iterations;
-  const double tolerance = model.settings.implicit_tolerance;
   s.iterations = 0;
   double alpha = 1.0, previous = std::numeric_limits<double>::infinity();
   for (;;) {

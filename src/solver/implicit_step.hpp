@@ -14,6 +14,9 @@ namespace phymul {
 // finite elements, obstacles, contact pairs). Allocates only when it factorises (the first
 // step, a new h).
 void step_implicit(const Model& model, Data& data, double h, double load_time);
+// The same with its own cap on the solves and tolerance (N): the implicit static solver's.
+void step_implicit(const Model& model, Data& data, double h, double load_time, int iterations,
+                   double tolerance);
 
 // The last implicit step's largest residual nodal force (N) and global solves.
 double implicit_residual_force(const Data& data);

@@ -106,6 +106,34 @@ TEST(ImplicitSteps, ComeToRestAtTheStaticEquilibrium) {
   EXPECT_LT(sim.max_residual_force(), 1e-10);
 }
 
+// The implicit static solver (solver: implicit) finds the relaxation's equilibrium, with
+// the rotations' derivative carried, in a few dozen solves where the relaxation takes
+// thousands of steps.
+TEST(ImplicitStatics, FindTheRelaxationsEquilibrium) {
+  auto statics = [](StaticSolver solver) {
+    Model model = hanging_cube(Integrator::verlet);
+    model.settings.mode = SolveMode::static_equilibrium;
+    model.settings.solver = solver;
+    model.settings.tolerance = 1e-12;
+    model.settings.max_iterations = 400000;
+    finalize(model);
+    return model;
+  };
+  Simulator relaxed(statics(StaticSolver::relaxation));
+  const StaticResult a = relaxed.solve_static();
+  ASSERT_TRUE(a.converged);
+  Simulator implicit(statics(StaticSolver::implicit));
+  const StaticResult b = implicit.solve_static();
+  ASSERT_TRUE(b.converged) << b.residual;
+  EXPECT_LT(b.residual, 1e-12);
+  const double sag = largest_displacement(relaxed.model(), relaxed.data().x);
+  const double gap = largest_gap(implicit.data().x, relaxed.data().x);
+  EXPECT_LT(gap, 1e-6 * sag) << gap / sag;
+  EXPECT_LT(b.iterations * 20, a.iterations);  // at most 20 solves an iteration
+  std::printf("static: relaxation %ld steps, implicit %ld steps; gap %.3g of the sag\n",
+              a.iterations, b.iterations, gap / sag);
+}
+
 // A 16^3 block (4913 nodes: the force pass runs in parallel) with its volume kept, damping
 // and gravity: one and two threads give the same bits.
 TEST(ImplicitSteps, OneAndTwoThreadsGiveBitIdenticalStates) {
