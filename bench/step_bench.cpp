@@ -28,6 +28,37 @@ BENCHMARK(BM_Step)
     ->ArgsProduct({{10, 20, 30, 40}, {1}})
     ->Args({40, 2})
     ->Unit(benchmark::kMillisecond);
+// Implicit steps (backward Euler by local/global iterations) on the same pushed cube, at
+// range(1) times the explicit scheme's dt, at most range(2) global solves a step (tolerance
+// 1e-9 N: the cap is what stops them here). The factorisation, in the first step, is not
+// timed. Beside BM_Step/n/1: the same grid, one thread.
+void BM_StepImplicit(benchmark::State& state) {
+  omp_set_num_threads(1);
+  phymul::Model model = phymul::bench::pushed_cube(int(state.range(0)));
+  model.settings.integrator = phymul::Integrator::implicit;
+  model.settings.implicit_iterations = int(state.range(2));
+  model.settings.implicit_tolerance = 1e-9;
+  phymul::finalize(model);
+  phymul::Simulator sim(model);
+  sim.set_dt(double(state.range(1)) * sim.dt());
+  sim.step();
+  phymul::bench::time_steps(state, sim);
+  state.counters["dt_over_explicit"] = double(state.range(1));
+  state.counters["ns_per_node_explicit_dt"] =
+      state.counters["ns_per_node_step"] / double(state.range(1));
+}
+BENCHMARK(BM_StepImplicit)
+    ->ArgsProduct({{10, 20}, {10, 100}, {5}})
+    ->Args({20, 100, 20})
+    ->ArgNames({"n", "dt_x", "iterations"})
+    ->Unit(benchmark::kMillisecond);
+// The 40^3 grid: its factor takes minutes and about a gigabyte; two steps are timed.
+BENCHMARK(BM_StepImplicit)
+    ->Args({40, 100, 5})
+    ->ArgNames({"n", "dt_x", "iterations"})
+    ->Iterations(2)
+    ->Unit(benchmark::kMillisecond);
+
 // Every shape-memory node of the model on the scalar path, in node order (the kernel before
 // the batched one).
 void scalar_kernel_only(phymul::Model& model) {

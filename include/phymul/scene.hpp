@@ -40,13 +40,16 @@ class SceneError : public std::runtime_error {
   std::vector<Diagnostic> diagnostics_;
 };
 
-enum class Integrator { verlet, newton_cotes };
+// verlet, newton_cotes: explicit; implicit: backward Euler by local/global iterations
+// (solver/implicit_step.hpp), stable at any dt.
+enum class Integrator { verlet, newton_cotes, implicit };
 enum class SolveMode { dynamic, static_equilibrium };
 enum class FrameMode { polar, frame };
 enum class Relaxation { fire, kinetic, viscous };
-// How static mode finds the equilibrium: damped pseudo-dynamics of any model, or the reference
-// finite elements' Newton method (fem objects only; solver/newton_run.hpp).
-enum class StaticSolver { relaxation, newton };
+// How static mode finds the equilibrium: damped pseudo-dynamics of any model, the reference
+// finite elements' Newton method (fem objects only; solver/newton_run.hpp), or the implicit
+// steps' local/global iterations with the inertia relaxed (what integrator: implicit takes).
+enum class StaticSolver { relaxation, newton, implicit };
 // What dt: auto takes its share of: the Gershgorin bound on the shape-memory stiffness, or
 // the highest frequency found by power iteration on the linearised forces (Simulator).
 enum class DtEstimate { gershgorin, power };
@@ -57,6 +60,9 @@ struct SimulationSpec {
   DtEstimate dt_estimate = DtEstimate::gershgorin;  // that limit's estimate
   double duration = 1.0;  // s (static: the schedules are evaluated at its end)
   Integrator integrator = Integrator::verlet;
+  int implicit_iterations = 20;      // implicit: most global solves per step
+  double implicit_tolerance = 1e-6;  // N, implicit: a step's largest residual nodal force
+  SourceLoc integrator_loc;          // of `integrator`; line 0 when absent
   SolveMode mode = SolveMode::dynamic;
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  // m/s^2
   double damping = 0.0;                               // 1/s, mass-proportional viscous damping

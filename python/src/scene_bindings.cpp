@@ -261,12 +261,15 @@ void bind_simulation(py::module_& m) {
   quantity(c, "simulation", "tolerance", &SimulationSpec::tolerance);
   optional_quantity(c, "simulation", "mass_scaling_dt", &SimulationSpec::mass_scaling_dt);
   integer(c, "simulation", "load_steps", &SimulationSpec::load_steps);
+  integer(c, "simulation", "implicit_iterations", &SimulationSpec::implicit_iterations);
+  quantity(c, "simulation", "implicit_tolerance", &SimulationSpec::implicit_tolerance);
   choice(c, "simulation", "mode", &SimulationSpec::mode,
          Words<SolveMode>{
              {{"dynamic", SolveMode::dynamic}, {"static", SolveMode::static_equilibrium}}});
   choice(c, "simulation", "integrator", &SimulationSpec::integrator,
-         Words<Integrator>{
-             {{"verlet", Integrator::verlet}, {"newton-cotes", Integrator::newton_cotes}}});
+         Words<Integrator>{{{"verlet", Integrator::verlet},
+                            {"newton-cotes", Integrator::newton_cotes},
+                            {"implicit", Integrator::implicit}}});
   choice(c, "simulation", "relaxation", &SimulationSpec::relaxation,
          Words<Relaxation>{{{"fire", Relaxation::fire},
                             {"kinetic", Relaxation::kinetic},

@@ -22,6 +22,7 @@ const Condition kShapeMemory{"model", {"shape-memory"}};
 const Condition kFem{"model", {"fem"}};
 const Condition kVolume{"surface", {"false"}};
 const Condition kStatic{"mode", {"static"}};
+const Condition kImplicit{"integrator", {"implicit"}};
 const Condition kDisplacement{"type", {"displacement"}};
 const Condition kSpring{"type", {"spring"}};
 const Condition kRigid{"type", {"rigid"}};
@@ -197,9 +198,33 @@ std::vector<Parameter> simulation_parameters() {
       {.section = "simulation",
        .name = "integrator",
        .kind = Kind::choice,
-       .choices = {"verlet", "newton-cotes"},
+       .choices = {"verlet", "newton-cotes", "implicit"},
        .default_value = "verlet",
-       .doc = "Time integration scheme."},
+       .doc = "Time integration scheme. `verlet` and `newton-cotes` are explicit (dt below the "
+              "stability limit); `implicit` is backward Euler solved by local/global iterations "
+              "(rotations fitted per node, then one prefactorised sparse solve), stable at any "
+              "dt, for elastic shape-memory objects with gravity, forces, pressures, fixed and "
+              "prescribed nodes, stitches, doubled nodes and volume constraints (see "
+              "docs/implicit.md). Static mode relaxes with Verlet pseudo-dynamics whatever "
+              "this says."},
+      {.section = "simulation",
+       .name = "implicit_iterations",
+       .kind = Kind::integer,
+       .range = closed(1, 100000),
+       .default_value = "20",
+       .when = {kImplicit},
+       .doc = "Implicit steps: most global solves per step; the step ends there even when the "
+              "residual is above `implicit_tolerance`."},
+      {.section = "simulation",
+       .name = "implicit_tolerance",
+       .kind = Kind::quantity,
+       .dimension = Dimension::force,
+       .range = gt(0),
+       .default_value = "1e-6",
+       .when = {kImplicit},
+       .doc = "Implicit steps: a step's iterations stop when the largest residual nodal force "
+              "of backward Euler (inertia, damping, every force, less the volume constraints' "
+              "pressures) is below it."},
       {.section = "simulation",
        .name = "mode",
        .kind = Kind::choice,
@@ -251,10 +276,13 @@ std::vector<Parameter> simulation_parameters() {
       {.section = "simulation",
        .name = "solver",
        .kind = Kind::choice,
-       .choices = {"relaxation", "newton"},
+       .choices = {"relaxation", "newton", "implicit"},
        .default_value = "relaxation",
        .when = {kStatic},
-       .doc = "Static mode: `relaxation` (damped pseudo-dynamics, any model) or `newton` (the "
+       .doc = "Static mode: `relaxation` (damped pseudo-dynamics, any model), `implicit` (backward-"
+              "Euler steps of 1000 times dt from rest, each solved by the implicit integrator's "
+              "local/global iterations to `tolerance` or 20 solves, until the residual is below "
+              "`tolerance`; the implicit integrator's objects and loads) or `newton` (the "
               "reference finite elements: fully integrated hexahedra with mean dilatation or "
               "tetrahedra, Newton with a line search and a sparse Cholesky, `load_steps` "
               "scaling the end-time loads). Newton takes `model: fem` objects, stitches, "

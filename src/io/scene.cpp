@@ -243,7 +243,12 @@ SimulationSpec SceneBuilder::simulation(SectionReader& reader) {
   reader.read("mass_scaling_dt", spec.mass_scaling_dt);
   reader.read("duration", spec.duration);
   reader.read("integrator", spec.integrator,
-              {{"verlet", Integrator::verlet}, {"newton-cotes", Integrator::newton_cotes}});
+              {{"verlet", Integrator::verlet},
+               {"newton-cotes", Integrator::newton_cotes},
+               {"implicit", Integrator::implicit}});
+  spec.integrator_loc = reader.value_loc("integrator").value_or(SourceLoc{});
+  reader.read("implicit_iterations", spec.implicit_iterations);
+  reader.read("implicit_tolerance", spec.implicit_tolerance);
   reader.read("mode", spec.mode,
               {{"dynamic", SolveMode::dynamic}, {"static", SolveMode::static_equilibrium}});
   reader.read("gravity", spec.gravity);
@@ -256,7 +261,9 @@ SimulationSpec SceneBuilder::simulation(SectionReader& reader) {
                {"kinetic", Relaxation::kinetic},
                {"viscous", Relaxation::viscous}});
   reader.read("solver", spec.solver,
-              {{"relaxation", StaticSolver::relaxation}, {"newton", StaticSolver::newton}});
+              {{"relaxation", StaticSolver::relaxation},
+               {"newton", StaticSolver::newton},
+               {"implicit", StaticSolver::implicit}});
   spec.solver_loc = reader.value_loc("solver").value_or(SourceLoc{});
   reader.done();
   return spec;

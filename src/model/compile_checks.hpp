@@ -12,4 +12,8 @@ namespace phymul {
 // diagnostic each, at the offending field, saying what is allowed.
 void check_newton_scene(const Scene& scene, std::vector<Diagnostic>& problems);
 
+// What `integrator: implicit` cannot take in dynamics (rigid and active objects, fem
+// materials, obstacles, contacts): one diagnostic each, at the offending field.
+void check_implicit_scene(const Scene& scene, std::vector<Diagnostic>& problems);
+
 }  // namespace phymul

@@ -246,6 +246,7 @@ Model compile_scene(const Scene& scene) {
   k.model.gravity = scene.simulation.gravity;
   k.model.damping = scene.simulation.damping;
   check_newton_scene(scene, k.problems);
+  check_implicit_scene(scene, k.problems);
   for (const ObjectSpec& o : scene.objects) k.add_object(o);
   if (k.problems.empty()) add_links(k, scene);
   if (k.problems.empty()) {

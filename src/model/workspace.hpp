@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "mesh/spatial_hash.hpp"
+#include "model/implicit_system.hpp"
 #include "phymul/data.hpp"
 
 namespace phymul {
@@ -50,6 +51,7 @@ struct Workspace {
   JointVolumeCache joint;
   // J per block of each shape memory's and each explicit FEM's parallel plan, each pass.
   std::vector<std::vector<double>> shape_memory_blocks, fem_blocks;
+  ImplicitSystem implicit;  // integrator: implicit
 };
 
 }  // namespace phymul

@@ -11,6 +11,7 @@
 #include "model/thread_team.hpp"
 #include "model/workspace.hpp"
 #include "phymul/simulation.hpp"
+#include "solver/implicit_step.hpp"
 #include "solver/rigid.hpp"
 #include "solver/step.hpp"
 
@@ -133,6 +134,16 @@ void fire_update(const Model& model, Data& d, StaticProgress& fire) {
   if (++fire.fire_downhill > 5) fire.fire_alpha *= 0.99;
 }
 
+// The implicit static solver: a backward-Euler step of 1000 times dt from rest (its
+// inertia a weak pull towards where the step started, which keeps the iteration matrix
+// definite where nothing holds a body), solved to the static tolerance or 20 solves. Its fixed
+// point, a step that does not move, is the equilibrium f = 0.
+void implicit_static_step(const Model& model, Data& d, double load_time, double tolerance) {
+  for (Vec3& v : d.v) v.setZero();
+  step_implicit(model, d, 1000.0 * d.dt, load_time, model.settings.implicit_iterations, tolerance);
+  for (Vec3& v : d.v) v.setZero();
+}
+
 StaticResult continue_relax(const Model& model, Data& d, double load_time, long max_iterations,
                             const RelaxProgress& progress, double tolerance) {
   StaticProgress& p = d.static_progress;
@@ -144,14 +155,19 @@ StaticResult continue_relax(const Model& model, Data& d, double load_time, long 
       break;
     }
     if (p.step_iterations >= max_iterations) break;
-    if (model.settings.integrator == Integrator::verlet)
-      step_verlet(model, d, d.dt, load_time);
-    else
+    // (Relaxation is explicit pseudo-dynamics: the implicit integrator relaxes by Verlet.)
+    if (model.settings.solver == StaticSolver::implicit)
+      implicit_static_step(model, d, load_time, tolerance);
+    else if (model.settings.integrator == Integrator::newton_cotes)
       step_newton_cotes(model, d, d.dt, load_time);
+    else
+      step_verlet(model, d, d.dt, load_time);
     ++p.step_iterations;
     ++d.step;
     checked_step(model, d, d.time, load_time);
-    if (model.settings.relaxation == Relaxation::fire) {
+    if (model.settings.solver == StaticSolver::implicit) {
+      // Each step starts from rest: the velocities only told the step's motion.
+    } else if (model.settings.relaxation == Relaxation::fire) {
       fire_update(model, d, p);
     } else if (model.settings.relaxation == Relaxation::kinetic) {
       // Dynamic relaxation: at a kinetic-energy peak the system is nearest its minimum

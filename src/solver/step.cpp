@@ -16,6 +16,7 @@
 #include "model/thread_team.hpp"
 #include "model/workspace.hpp"
 #include "phymul/simulation.hpp"
+#include "solver/implicit_step.hpp"
 #include "solver/rigid.hpp"
 #include "solver/runaway_guard.hpp"
 
@@ -392,6 +393,8 @@ void step(const Model& model, Data& d) {
   const double time = d.time, previous_load = d.load_time, load_time = d.time + d.dt;
   if (model.settings.integrator == Integrator::verlet)
     step_verlet(model, d, d.dt, load_time);
+  else if (model.settings.integrator == Integrator::implicit)
+    step_implicit(model, d, d.dt, load_time);
   else
     step_newton_cotes(model, d, d.dt, load_time);
   d.time = load_time;

@@ -87,5 +87,24 @@ TEST(SpringSupport, StifferSpringsApproachTheFixedSupport) {
   EXPECT_GT(stable_time_step(soft), stable_time_step(hard));
 }
 
+// The implicit steps' matrix carries the springs exactly: their static solution is the
+// relaxation's.
+TEST(SpringSupport, TheImplicitStaticSolutionIsTheRelaxations) {
+  const std::string springs = "  - {type: spring, object: block, nodes: top, stiffness: 200 N/m}\n";
+  Simulator relaxed(block("mode: static, tolerance: 1e-10 N", springs));
+  ASSERT_TRUE(relaxed.relax(1.0, 400000).converged);
+  Simulator implicit(block("mode: static, solver: implicit, tolerance: 1e-10 N", springs));
+  ASSERT_TRUE(implicit.solve_static().converged);
+  double largest = 0.0, apart = 0.0;
+  const Model& model = relaxed.model();
+  for (int i = 0; i < model.node_count(); ++i) {
+    largest =
+        std::max(largest, (relaxed.data().x[size_t(i)] - model.rest_position[size_t(i)]).norm());
+    apart = std::max(apart, (relaxed.data().x[size_t(i)] - implicit.data().x[size_t(i)]).norm());
+  }
+  EXPECT_GT(largest, 1e-3);
+  EXPECT_LT(apart, 1e-6 * largest);
+}
+
 }  // namespace
 }  // namespace phymul

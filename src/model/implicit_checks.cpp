@@ -1,0 +1,62 @@
+// What `integrator: implicit` cannot take yet (rigid and active objects, finite elements,
+// obstacles, contacts), found in the scene before compiling: one diagnostic each, at the field.
+#include <fmt/format.h>
+
+#include <string>
+#include <vector>
+
+#include "model/compile_checks.hpp"
+
+namespace phymul {
+namespace {
+
+// Where `integrator: implicit` was written, for messages that point at it.
+std::string implicit_at(const SimulationSpec& s) {
+  return s.integrator_loc.line > 0 ? fmt::format(" (line {})", s.integrator_loc.line) : "";
+}
+
+// The same for `solver: implicit` in static mode.
+std::string implicit_static_at(const SimulationSpec& s) {
+  return s.solver_loc.line > 0
+             ? fmt::format(" (the implicit static solver, line {})", s.solver_loc.line)
+             : "";
+}
+
+constexpr const char* kTakes =
+    "it takes elastic shape-memory objects with gravity, 'force' loads, pressures, 'fixed' and "
+    "'displacement' constraints, stitches, doubled nodes and volume constraints; use "
+    "'integrator: verlet'";
+
+template <class Spec>
+void refuse_all(const std::vector<Spec>& specs, const char* what, const std::string& at,
+                std::vector<Diagnostic>& problems) {
+  for (const Spec& s : specs)
+    problems.push_back({s.loc, fmt::format("{} are not supported by 'integrator: implicit'{}: {}",
+                                           what, at, kTakes)});
+}
+
+}  // namespace
+
+void check_implicit_scene(const Scene& scene, std::vector<Diagnostic>& problems) {
+  const SimulationSpec& s = scene.simulation;
+  const bool statics = s.mode == SolveMode::static_equilibrium;
+  if (statics ? s.solver != StaticSolver::implicit : s.integrator != Integrator::implicit) return;
+  const std::string at = statics ? implicit_static_at(s) : implicit_at(s);
+  for (const ObjectSpec& o : scene.objects) {
+    if (o.type != ObjectType::elastic)
+      problems.push_back(
+          {o.loc,
+           fmt::format("object '{}' has 'type: {}', not supported by 'integrator: "
+                       "implicit'{}: {}",
+                       o.name, o.type == ObjectType::rigid ? "rigid" : "active", at, kTakes)});
+    else if (o.material.model == ElasticModel::fem)
+      problems.push_back({o.material.loc,
+                          fmt::format("object '{}' has 'model: fem', not supported by 'integrator: "
+                                      "implicit'{}: {}",
+                                      o.name, at, kTakes)});
+  }
+  refuse_all(scene.obstacles, "obstacles", at, problems);
+  refuse_all(scene.contacts, "contacts", at, problems);
+}
+
+}  // namespace phymul

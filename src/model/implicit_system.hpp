@@ -1,0 +1,54 @@
+// What an implicit step keeps between steps (Workspace::implicit): the global matrix of the
+// local/global iterations, factorised for one dt, and the vectors its solves work in. Built by
+// the first implicit step (solver/implicit_step.cpp) and again only when dt changes: the
+// matrix depends on dt, the inertias, the damping and the held axes, and only dt can change
+// during a run. A copy starts without a factor and makes its own on its first step.
+#pragma once
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <array>
+#include <limits>
+#include <memory>
+#include <vector>
+
+namespace phymul {
+
+// L L^T of one axis's matrix P, symmetrically permuted by a fill-reducing order beforehand
+// (the factor itself in natural order, so that a solve permutes into a kept buffer and never
+// allocates).
+struct ImplicitFactor {
+  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::NaturalOrdering<int>> llt;
+  std::vector<int> position;  // per unknown: its row in the permuted matrix
+};
+
+struct ImplicitSystem {
+  double h = std::numeric_limits<double>::quiet_NaN();  // s, the dt factorised for; NaN: none
+  // Per axis: each node's unknown (doubled groups share one), -1 on a held axis.
+  std::array<std::vector<int>, 3> unknown;
+  std::array<int, 3> unknowns{0, 0, 0};
+  // Per axis: its factor; axes holding the same nodes share one.
+  std::array<std::shared_ptr<const ImplicitFactor>, 3> factor;
+  // Per axis, unknowns long: the residual and the correction.
+  std::array<Eigen::VectorXd, 3> residual, correction;
+  // The solves' right-hand sides, row by row in the factor's order (solver/implicit_step.cpp).
+  std::vector<double> block;
+  // Per volume constraint and axis: its gradient over the unknowns and P^-1 times it.
+  std::vector<std::array<Eigen::VectorXd, 3>> gradient, solved_gradient;
+  // The last step: global solves taken, and the largest residual nodal force (N) at its end.
+  int iterations = 0;
+  double residual_force = 0.0;
+
+  ImplicitSystem() = default;
+  // A copy refactorises on its first step rather than share a factor that its original may
+  // replace (a new dt) while the copy runs on another thread.
+  ImplicitSystem(const ImplicitSystem&) {}
+  ImplicitSystem& operator=(const ImplicitSystem&) {
+    *this = ImplicitSystem();
+    return *this;
+  }
+  ImplicitSystem(ImplicitSystem&&) = default;
+  ImplicitSystem& operator=(ImplicitSystem&&) = default;
+};
+
+}  // namespace phymul

@@ -1,0 +1,385 @@
+// Backward Euler by local/global iterations (projective dynamics, Bouaziz et al. 2014), for
+// the shape memory of DESIGN 2.1. For fixed rotations the energy sum K/2 |A_k x - R_k c_k|^2
+// (A_k x = x_i - mean of its neighbours) is quadratic with Hessian L = sum K A_k^T A_k, so
+//   P = M (1/h^2 + c/h) + L
+// is constant for a dt, and factorised once. Each iteration evaluates the full forces (the
+// local step: every node's polar fit, and the forces through the rotation's derivative the
+// fit adds), forms the backward-Euler residual
+//   r(x) = f(x) + M/h^2 (x0 + h v0 - x) - c M (x - x0)/h
+// and moves x by P^-1 r. Where the rotations minimise their terms this is the projective
+// global step exactly; here the rotation-derivative forces stay in r, so the fixed point,
+// r = 0, is this model's backward-Euler step and not a nearby model's. Volume constraints
+// enter each solve linearised (a Schur complement on their gradients), then are projected
+// exactly; doubled nodes share one unknown; held axes are eliminated.
+#include "solver/implicit_step.hpp"
+
+#include <Eigen/OrderingMethods>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "constraints/constraints.hpp"
+#include "model/workspace.hpp"
+#include "phymul/forces.hpp"
+
+namespace phymul {
+namespace {
+
+// Most volume constraints a solve takes together (its Schur complement is on the stack).
+constexpr int kMaxVolumes = kMaxJointVolumes;
+using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxVolumes, kMaxVolumes>;
+using SmallVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxVolumes, 1>;
+
+// A step whose residual grew takes this share of its corrections from then on (down to
+// kShortestStep): the iteration's matrix leaves out the Hessian's parts from the rotations'
+// derivative and the volumes' curvature, and where those exceed it (a soft mode of the
+// shape memory) the full correction overshoots.
+constexpr double kShrink = 0.7, kShortestStep = 1.0 / 16.0;
+
+void refuse_unsupported(const Model& model) {
+  const char* what = !model.rigid_bodies.empty()    ? "rigid bodies"
+                     : !model.fibres.empty()        ? "active fibres"
+                     : !model.explicit_fem.empty()  ? "explicit finite elements"
+                     : !model.obstacles.empty()     ? "rigid obstacles"
+                     : !model.contact_pairs.empty() ? "contact pairs"
+                     : model.volumes.size() > size_t(kMaxVolumes)
+                         ? "more than 16 volume constraints"
+                         : nullptr;
+  if (what)
+    throw std::invalid_argument(std::string("the implicit integrator does not support ") + what +
+                                " yet: use the verlet integrator");
+}
+
+// Per axis, each node's unknown: one per free node, one per doubled group (unless a member
+// holds the group on that axis), -1 on held axes.
+void number_unknowns(const Model& model, ImplicitSystem& s) {
+  const int n = model.node_count();
+  std::vector<int> group(size_t(n), -1);
+  for (int g = 0; g < model.doubled.rows(); ++g)
+    for (int i : model.doubled.row(g)) group[size_t(i)] = g;
+  for (int a = 0; a < 3; ++a) {
+    std::vector<int>& u = s.unknown[size_t(a)];
+    u.assign(size_t(n), -1);
+    std::vector<int> of_group(size_t(model.doubled.rows()), -1);
+    int count = 0;
+    for (int i = 0; i < n; ++i) {
+      const int g = group[size_t(i)];
+      if (g >= 0) {
+        if (model.doubled_leader[size_t(g)][size_t(a)] >= 0) continue;
+        if (of_group[size_t(g)] < 0) of_group[size_t(g)] = count++;
+        u[size_t(i)] = of_group[size_t(g)];
+      } else if (model.inverse_mass[size_t(i)][a] > 0.0) {
+        u[size_t(i)] = count++;
+      }
+    }
+    s.unknowns[size_t(a)] = count;
+  }
+}
+
+// P = M (1/h^2 + c/h) + sum K A_k^T A_k (+ the springs' k) over one axis's unknowns (lower triangle
+// and diagonal are what the factor reads; both halves are given to the ordering).
+Eigen::SparseMatrix<double> global_matrix(const Model& model, const std::vector<int>& u, int count,
+                                          double h) {
+  std::vector<Eigen::Triplet<double>> entries;
+  const double per_mass = 1.0 / (h * h) + model.damping / h;
+  for (int i = 0; i < model.node_count(); ++i)
+    if (u[size_t(i)] >= 0)
+      entries.emplace_back(u[size_t(i)], u[size_t(i)], model.inertia[size_t(i)] * per_mass);
+  std::vector<std::pair<int, double>> row;  // A_k's unknowns and coefficients
+  for (const ShapeMemory& m : model.shape_memory) {
+    for (int k = 0; k < int(m.nodes.size()); ++k) {
+      const auto nb = m.neighbours.row(k);
+      row.clear();
+      if (u[size_t(m.nodes[size_t(k)])] >= 0) row.emplace_back(u[size_t(m.nodes[size_t(k)])], 1.0);
+      for (int j : nb)
+        if (u[size_t(j)] >= 0) row.emplace_back(u[size_t(j)], -1.0 / double(nb.size()));
+      for (const auto& [p, cp] : row)
+        for (const auto& [q, cq] : row) entries.emplace_back(p, q, m.stiffness * cp * cq);
+    }
+  }
+  // A spring support is linear: its stiffness is exact on the diagonal.
+  for (const SpringSupport& springs : model.springs)
+    for (int i : springs.nodes)
+      if (u[size_t(i)] >= 0) entries.emplace_back(u[size_t(i)], u[size_t(i)], springs.stiffness);
+  Eigen::SparseMatrix<double> P(count, count);
+  P.setFromTriplets(entries.begin(), entries.end());
+  return P;
+}
+
+// The factor of one axis's matrix, in a fill-reducing order (approximate minimum degree).
+std::shared_ptr<const ImplicitFactor> factorise(const Eigen::SparseMatrix<double>& P) {
+  auto f = std::make_shared<ImplicitFactor>();
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> inverse;
+  Eigen::AMDOrdering<int>()(P, inverse);
+  const Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order = inverse.inverse();
+  f->position.assign(order.indices().data(), order.indices().data() + order.size());
+  std::vector<Eigen::Triplet<double>> entries;
+  for (int col = 0; col < P.outerSize(); ++col)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(P, col); it; ++it) {
+      const int r = f->position[size_t(it.row())], c = f->position[size_t(it.col())];
+      if (r >= c) entries.emplace_back(r, c, it.value());
+    }
+  Eigen::SparseMatrix<double> permuted(P.rows(), P.cols());
+  permuted.setFromTriplets(entries.begin(), entries.end());
+  f->llt.compute(permuted);
+  if (f->llt.info() != Eigen::Success)
+    throw std::runtime_error("the implicit step's matrix is not positive definite");
+  return f;
+}
+
+// Numbers the unknowns and factorises every axis's matrix for step h; axes whose unknowns
+// coincide share a factor. Allocates: only on a model's first step and when dt changes.
+void prepare(const Model& model, ImplicitSystem& s, double h) {
+  refuse_unsupported(model);
+  number_unknowns(model, s);
+  for (int a = 0; a < 3; ++a) {
+    s.factor[size_t(a)] = nullptr;
+    for (int b = 0; b < a && !s.factor[size_t(a)]; ++b)
+      if (s.unknown[size_t(b)] == s.unknown[size_t(a)]) s.factor[size_t(a)] = s.factor[size_t(b)];
+    if (!s.factor[size_t(a)])
+      s.factor[size_t(a)] =
+          factorise(global_matrix(model, s.unknown[size_t(a)], s.unknowns[size_t(a)], h));
+    const int m = s.unknowns[size_t(a)];
+    s.residual[size_t(a)].setZero(m);
+    s.correction[size_t(a)].setZero(m);
+  }
+  s.gradient.resize(model.volumes.size());
+  s.solved_gradient.resize(model.volumes.size());
+  for (size_t l = 0; l < model.volumes.size(); ++l)
+    for (int a = 0; a < 3; ++a) {
+      s.gradient[l][size_t(a)].setZero(s.unknowns[size_t(a)]);
+      s.solved_gradient[l][size_t(a)].setZero(s.unknowns[size_t(a)]);
+    }
+  size_t most = 0;
+  for (int a = 0; a < 3; ++a) most = std::max(most, size_t(s.unknowns[size_t(a)]));
+  s.block.assign(most * 3 * (1 + model.volumes.size()), 0.0);
+  s.h = h;
+}
+
+// X = P^-1 X for k right-hand sides at once, X row-major in the permuted order (row p's k
+// values at x + p k): one pass over the factor for all of them, the k values of a row
+// contiguous (an axis's residual and each volume's gradient, for each axis sharing the
+// factor), where k separate solves would read the factor k times.
+// K: the count at compile time (unrolled), or 0 for any count k.
+template <int K>
+void solve_block(const ImplicitFactor& f, double* __restrict x, int count) {
+  const int k = K > 0 ? K : count;
+  const Eigen::SparseMatrix<double>& L = f.llt.matrixL().nestedExpression();
+  const int n = int(L.cols());
+  const int* __restrict start = L.outerIndexPtr();
+  const int* __restrict row = L.innerIndexPtr();
+  const double* __restrict value = L.valuePtr();
+  for (int j = 0; j < n; ++j) {  // L Y = X; each column's diagonal comes first
+    double* __restrict xj = x + size_t(j) * size_t(k);
+    const double inverse = 1.0 / value[start[j]];
+    for (int c = 0; c < k; ++c) xj[c] *= inverse;
+    for (int e = start[j] + 1; e < start[j + 1]; ++e) {
+      double* __restrict xi = x + size_t(row[e]) * size_t(k);
+      const double l = value[e];
+      for (int c = 0; c < k; ++c) xi[c] -= l * xj[c];
+    }
+  }
+  for (int j = n - 1; j >= 0; --j) {  // L^T X = Y
+    double* __restrict xj = x + size_t(j) * size_t(k);
+    for (int e = start[j] + 1; e < start[j + 1]; ++e) {
+      const double* __restrict xi = x + size_t(row[e]) * size_t(k);
+      const double l = value[e];
+      for (int c = 0; c < k; ++c) xj[c] -= l * xi[c];
+    }
+    const double inverse = 1.0 / value[start[j]];
+    for (int c = 0; c < k; ++c) xj[c] *= inverse;
+  }
+}
+
+// P^-1 applied to every axis's residual (into correction) and every volume's gradient (into
+// solved_gradient), the axes that share a factor together.
+void solve_all(const Model& model, ImplicitSystem& s) {
+  const int per_axis = 1 + int(model.volumes.size());
+  for (int a = 0; a < 3; ++a) {
+    if (a > 0 && (s.factor[size_t(a)] == s.factor[0] || (a == 2 && s.factor[2] == s.factor[1])))
+      continue;  // solved with the first axis that shares its factor
+    int axes[3], count = 0;
+    for (int b = a; b < 3; ++b)
+      if (s.factor[size_t(b)] == s.factor[size_t(a)]) axes[count++] = b;
+    const ImplicitFactor& f = *s.factor[size_t(a)];
+    const int k = count * per_axis, m = s.unknowns[size_t(a)];
+    double* x = s.block.data();
+    for (int u = 0; u < m; ++u) {
+      double* r = x + size_t(f.position[size_t(u)]) * size_t(k);
+      for (int q = 0; q < count; ++q) {
+        const size_t b = size_t(axes[q]);
+        r[q * per_axis] = s.residual[b][u];
+        for (int l = 1; l < per_axis; ++l) r[q * per_axis + l] = s.gradient[size_t(l - 1)][b][u];
+      }
+    }
+    switch (k) {  // one axis or three, without or with one or two volume constraints
+      case 3:
+        solve_block<3>(f, x, k);
+        break;
+      case 6:
+        solve_block<6>(f, x, k);
+        break;
+      case 9:
+        solve_block<9>(f, x, k);
+        break;
+      default:
+        solve_block<0>(f, x, k);
+    }
+    for (int u = 0; u < m; ++u) {
+      const double* r = x + size_t(f.position[size_t(u)]) * size_t(k);
+      for (int q = 0; q < count; ++q) {
+        const size_t b = size_t(axes[q]);
+        s.correction[b][u] = r[q * per_axis];
+        for (int l = 1; l < per_axis; ++l)
+          s.solved_gradient[size_t(l - 1)][b][u] = r[q * per_axis + l];
+      }
+    }
+  }
+}
+
+// Sums a node field's free axes into the unknowns (a doubled group's members add up).
+void gather(const ImplicitSystem& s, std::span<const Vec3> field,
+            std::array<Eigen::VectorXd, 3>& out) {
+  for (int a = 0; a < 3; ++a) {
+    out[size_t(a)].setZero();
+    const std::vector<int>& u = s.unknown[size_t(a)];
+    for (size_t i = 0; i < u.size(); ++i)
+      if (u[i] >= 0) out[size_t(a)][u[i]] += field[i][a];
+  }
+}
+
+// The same over some nodes only (the rest of `field` is not read).
+void gather(const ImplicitSystem& s, std::span<const Vec3> field, std::span<const int> nodes,
+            std::array<Eigen::VectorXd, 3>& out) {
+  for (int a = 0; a < 3; ++a) {
+    out[size_t(a)].setZero();
+    const std::vector<int>& u = s.unknown[size_t(a)];
+    for (int i : nodes)
+      if (u[size_t(i)] >= 0) out[size_t(a)][u[size_t(i)]] += field[size_t(i)][a];
+  }
+}
+
+double dot(const std::array<Eigen::VectorXd, 3>& p, const std::array<Eigen::VectorXd, 3>& q) {
+  return p[0].dot(q[0]) + p[1].dot(q[1]) + p[2].dot(q[2]);
+}
+
+// The backward-Euler residual (N) per node into r, on every axis (held ones are not read).
+void backward_euler_residual(const Model& model, const Data& d, double h, std::span<Vec3> r) {
+  const Workspace& w = *d.work;
+  const double c = model.damping;
+  for (int i = 0; i < model.node_count(); ++i) {
+    const Vec3 moved = d.x[size_t(i)] - w.x_start[size_t(i)];
+    r[size_t(i)] = d.f[size_t(i)] + model.inertia[size_t(i)] / (h * h) *
+                                        (h * w.v_start[size_t(i)] - (1.0 + c * h) * moved);
+  }
+}
+
+// Largest residual nodal force (N) over the unknowns, less what the volume constraints'
+// pressures balance (the least-squares multipliers of their gradients).
+double largest_residual(const Model& model, ImplicitSystem& s) {
+  const int volumes = int(model.volumes.size());
+  if (volumes > 0) {
+    Small gg(volumes, volumes);
+    SmallVector gr(volumes);
+    for (int l = 0; l < volumes; ++l) {
+      gr[l] = dot(s.gradient[size_t(l)], s.residual);
+      for (int m = 0; m <= l; ++m)
+        gg(l, m) = gg(m, l) = dot(s.gradient[size_t(l)], s.gradient[size_t(m)]);
+    }
+    const SmallVector p = gg.ldlt().solve(gr);
+    for (int l = 0; l < volumes; ++l)
+      for (int a = 0; a < 3; ++a) s.residual[size_t(a)] -= p[l] * s.gradient[size_t(l)][size_t(a)];
+  }
+  double largest2 = 0.0;
+  for (int i = 0; i < model.node_count(); ++i) {
+    double r2 = 0.0;
+    for (int a = 0; a < 3; ++a)
+      if (const int u = s.unknown[size_t(a)][size_t(i)]; u >= 0)
+        r2 += s.residual[size_t(a)][u] * s.residual[size_t(a)][u];
+    largest2 = std::max(largest2, r2);
+  }
+  return std::sqrt(largest2);
+}
+
+// The correction P^-1 (r - G^T mu), mu such that each volume reaches its target to first
+// order (G the volumes' gradients over the unknowns).
+void global_step(const Model& model, Data& d, ImplicitSystem& s, double load_time) {
+  solve_all(model, s);
+  const int volumes = int(model.volumes.size());
+  if (volumes == 0) return;
+  Small schur(volumes, volumes);
+  SmallVector rate(volumes);
+  for (int l = 0; l < volumes; ++l) {
+    const VolumeConstraint& c = model.volumes[size_t(l)];
+    const double gap =
+        target_volume(model, d.controls, size_t(l), load_time) - enclosed_volume(d.x, c.triangles);
+    rate[l] = dot(s.gradient[size_t(l)], s.correction) - gap;
+  }
+  for (int l = 0; l < volumes; ++l)
+    for (int m = 0; m <= l; ++m)
+      schur(l, m) = schur(m, l) = dot(s.gradient[size_t(l)], s.solved_gradient[size_t(m)]);
+  const SmallVector mu = schur.ldlt().solve(rate);
+  for (int l = 0; l < volumes; ++l)
+    for (int a = 0; a < 3; ++a)
+      s.correction[size_t(a)] -= mu[l] * s.solved_gradient[size_t(l)][size_t(a)];
+}
+
+// The residual and the volumes' gradients at d.x over the unknowns; the largest residual
+// nodal force (N).
+double residual_at(const Model& model, Data& d, ImplicitSystem& s, double h) {
+  Workspace& w = *d.work;
+  backward_euler_residual(model, d, h, w.f_start);
+  gather(s, w.f_start, s.residual);
+  for (size_t l = 0; l < model.volumes.size(); ++l) {
+    volume_gradient(model.volumes[l], d.x, w.f_start);
+    gather(s, w.f_start, model.volumes[l].nodes, s.gradient[l]);
+  }
+  return largest_residual(model, s);
+}
+
+}  // namespace
+
+void step_implicit(const Model& model, Data& d, double h, double load_time) {
+  step_implicit(model, d, h, load_time, model.settings.implicit_iterations,
+                model.settings.implicit_tolerance);
+}
+
+void step_implicit(const Model& model, Data& d, double h, double load_time, int most,
+                   double tolerance) {
+  Workspace& w = *d.work;
+  ImplicitSystem& s = w.implicit;
+  if (!(s.h == h)) prepare(model, s, h);
+  const int n = model.node_count();
+  for (int i = 0; i < n; ++i) {
+    w.x_start[size_t(i)] = d.x[size_t(i)];
+    w.v_start[size_t(i)] = d.v[size_t(i)];
+    d.x[size_t(i)] += h * d.v[size_t(i)];  // the first guess: the inertial position
+  }
+  apply_position_constraints(model, d.controls, w, d.x, load_time, w.f_start);
+  s.iterations = 0;
+  double alpha = 1.0, previous = std::numeric_limits<double>::infinity();
+  for (;;) {
+    compute_forces(model, d, load_time);  // the local step: each node's rotation
+    s.residual_force = residual_at(model, d, s, h);
+    if (s.residual_force <= tolerance || s.iterations >= most) break;
+    if (s.residual_force > previous) alpha = std::max(kShrink * alpha, kShortestStep);
+    previous = s.residual_force;
+    global_step(model, d, s, load_time);
+    for (int a = 0; a < 3; ++a) {
+      const std::vector<int>& u = s.unknown[size_t(a)];
+      for (int i = 0; i < n; ++i)
+        if (u[size_t(i)] >= 0) d.x[size_t(i)][a] += alpha * s.correction[size_t(a)][u[size_t(i)]];
+    }
+    // Exactly on the volumes (the linearised solve left them off by second-order terms).
+    apply_position_constraints(model, d.controls, w, d.x, load_time, w.f_start);
+    ++s.iterations;
+  }
+  d.load_time = load_time;
+  for (int i = 0; i < n; ++i) d.v[size_t(i)] = (d.x[size_t(i)] - w.x_start[size_t(i)]) / h;
+}
+
+double implicit_residual_force(const Data& d) { return d.work->implicit.residual_force; }
+int implicit_iterations(const Data& d) { return d.work->implicit.iterations; }
+
+}  // namespace phymul
