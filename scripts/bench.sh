@@ -2,7 +2,8 @@
 # make bench: Google Benchmark of full steps and of static relaxation (bench/results.json),
 # the shape-memory pass alone (bench/results_kernel.json), the prostate study's scenes on
 # one core (bench/results_prostate.json, with their real-time factor), the Truth Cube table
-# and the stiffness calibration on one core (bench/results_validation.json) and the
+# and the stiffness calibration on one core (bench/results_validation.json), the biopsy
+# example with its needle inserted on one core (bench/results_needle.json) and the
 # resident memory of the 40^3 step model in a fresh process (bench/memory.json), and one frame
 # of a run's output as text and binary (bench/results_frame.json).
 set -euo pipefail
@@ -25,6 +26,10 @@ OMP_NUM_THREADS=1 "$root/$build/bench/phymul_validation_bench" \
   --benchmark_counters_tabular=true
 OMP_NUM_THREADS=1 "$root/$build/bench/phymul_prostate_bench" \
   --benchmark_out="$root/bench/results_prostate.json" --benchmark_out_format=json \
+  --benchmark_counters_tabular=true "${repeat[@]}"
+# The biopsy example with its needle in the gland, one core (bench/results_needle.json).
+OMP_NUM_THREADS=1 "$root/$build/bench/phymul_needle_bench" \
+  --benchmark_out="$root/bench/results_needle.json" --benchmark_out_format=json \
   --benchmark_counters_tabular=true "${repeat[@]}"
 # One frame of a run's output, text and binary (bench/results_frame.json).
 OMP_NUM_THREADS=1 "$root/$build/bench/phymul_frame_bench" \

@@ -19,6 +19,15 @@ for scene in "$root"/examples/*.yaml; do
   "$py" "$root/scripts/plot_monitors.py" "$out/monitors.csv" "$out/${name}_monitors.png" \
     --title "$name"
 done
+# The biopsy (docs/needles.md): a needle through the probe's guide into the prostate.
+echo "== biopsy (a needle inserted into the prostate toward a target)"
+out="$results/biopsy"
+rm -rf "$out"
+"$root/$build/phymul" run "$root/examples/prostate/biopsy.yaml" -o "$out"
+xvfb-run -a "$py" "$root/scripts/render.py" "$out/biopsy.pvd" "$out/biopsy.png" \
+  --rest --title "biopsy: last frame, |displacement|" --view side
+"$py" "$root/scripts/plot_needle.py" "$out/monitors.csv" "$out/biopsy_needle.png" \
+  --title "biopsy: needle force against depth, target displacement"
 echo "== truthcube (the paper's section 3: beads measured in a compressed silicone cube)"
 "$root/$build/phymul" truthcube -o "$results/truthcube"
 echo "== prostate (the paper's section 4: an endorectal probe, bladder empty to full)"
@@ -47,6 +56,8 @@ echo "  <example>.pvd            open in ParaView for the whole series (frames: 
 echo "  monitors.csv, report.json"
 echo "and the Truth Cube study in $results/truthcube/: truthcube_errors.png (error per bead"
 echo "layer), truthcube_lsm_18.25pct.png, truthcube.json, beads.csv, *.vtu"
+echo "and the biopsy in $results/biopsy/: biopsy_needle.png (needle force against depth, the"
+echo "target's displacement and the tip-to-target distance), biopsy.png, biopsy_needles.pvd (needle)"
 echo "and the prostate study in $results/prostate/: prostate_deformation.png (deformation,"
 echo "centre displacement and probe force against filling), prostate_empty.png, prostate_full.png"
 echo "(pressure probe), prostate_empty_rigid.png, prostate_full_rigid.png (rigid probe, drawn),"

@@ -87,13 +87,14 @@ def last_frame(pvd_path):
     return path, (time if math.isfinite(time) else None)
 
 
-def obstacle_grid(vtu_path):
-    """The obstacles' surfaces written with a frame (<stem>_obstacles_<n>.vtu), or None."""
+def obstacle_grid(vtu_path, kind="obstacles"):
+    """The obstacles' surfaces (or, kind "needles", the needles' shafts, track points and
+    targets) written with a frame (<stem>_<kind>_<n>.vtu), or None."""
     match = re.match(r"^(.*)_(\d+)\.vtu$", os.path.basename(vtu_path))
     if not match:
         return None
     path = os.path.join(os.path.dirname(vtu_path),
-                        f"{match.group(1)}_obstacles_{match.group(2)}.vtu")
+                        f"{match.group(1)}_{kind}_{match.group(2)}.vtu")
     return read_grid(path) if os.path.isfile(path) else None
 
 
@@ -307,6 +308,21 @@ def render(args):
         mapper.ScalarVisibilityOff()
         prop.SetColor(*PLAIN_COLOUR)
     renderer.AddActor(actor)
+    # Needles run inside the body: it is drawn see-through, and they in red on top.
+    needles = obstacle_grid(vtu_path, "needles")
+    if needles is not None:
+        prop.SetOpacity(0.5)
+        needle_mapper = vtkDataSetMapper()
+        needle_mapper.SetInputData(needles)
+        needle_mapper.ScalarVisibilityOff()
+        needle_actor = vtkActor()
+        needle_actor.SetMapper(needle_mapper)
+        needle_prop = needle_actor.GetProperty()
+        needle_prop.SetColor(0.8, 0.1, 0.1)
+        needle_prop.SetLineWidth(4.0)
+        needle_prop.SetPointSize(9.0)
+        needle_prop.LightingOff()
+        renderer.AddActor(needle_actor)
 
     if rest_field:
         rest_mapper = vtkDataSetMapper()
@@ -374,6 +390,8 @@ def render(args):
         notes.append("grey wireframe: rest shape")
     if obstacles is not None:
         notes.append("translucent grey: rigid obstacles")
+    if needles is not None:
+        notes.append("red: needle shaft, track points and target")
     notes.append(f"{grid.GetNumberOfPoints()} nodes, {grid.GetNumberOfCells()} cells")
     notes_actor = vtkTextActor()
     notes_actor.SetInput("\n".join(notes))

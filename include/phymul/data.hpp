@@ -30,6 +30,42 @@ struct PairContact {
   double impulse = 0.0;         // N s along normal on the node (minus it on the triangle)
 };
 
+// A point of a tissue held on a needle's shaft (Needle): laterally on the axis, and along it
+// at `anchor` while it sticks.
+struct TrackPoint {
+  int tissue = 0;  // index in Needle::tissues
+  EmbeddedPoint point;
+  double anchor = 0.0;  // m along the shaft from the tip (<= 0 behind it): where it sticks
+  double length = 0.0;  // m of track it stands for: its share of the friction
+};
+
+// A needle's tip pushed through a tissue's surface.
+struct PunctureEvent {
+  int tissue = 0;      // index in Needle::tissues
+  double time = 0.0;   // s
+  double depth = 0.0;  // m
+  double force = 0.0;  // N, the tip's push along the shaft that broke through
+};
+
+// Where a tissue stands with a needle: untouched, pressed by the tip, punctured (an int in
+// NeedleState, as checkpoints store plain numbers).
+enum NeedlePhase : int { needle_outside = 0, needle_pressed = 1, needle_punctured = 2 };
+
+// What a needle has done to the tissues so far (Needle).
+struct NeedleState {
+  std::vector<int> phase;                // per tissue: a NeedlePhase
+  TrackPoint contact;                    // the surface point the tip presses (a tissue `pressed`)
+  std::vector<TrackPoint> track;         // by insertion; at most Needle::track_capacity (reserved)
+  double depth = 0.0;                    // m, of the tip at the last step
+  double last_point_depth = 0.0;         // m, of the tip when the last track point was made
+  int tip_tissue = -1;                   // the punctured tissue the tip advances in, or -1
+  Vec3 force = Vec3::Zero();             // N, of the tissues on the needle over the last step
+  std::vector<PunctureEvent> punctures;  // at most kMaxPunctures (reserved)
+};
+
+// Puncture events a needle records (later ones are not).
+inline constexpr size_t kMaxPunctures = 64;
+
 // Where a static solve stands between two relaxation iterations: with the rest of Data, all
 // that its next iteration reads.
 struct StaticProgress {
@@ -76,6 +112,7 @@ struct Controls {
   std::vector<Schedule> target_volume;     // per volume constraint: m^3 in x; empty: rest volume
   std::vector<Schedule> body_translation;  // per rigid body (driven ones follow it): m
   std::vector<Schedule> body_rotation;     // per rigid body: rad, a rotation vector
+  std::vector<Schedule> needle_depth;      // per needle: m in x
 };
 
 // A volume constraint's target (m^3) at load_time under these controls.
@@ -107,6 +144,7 @@ struct Data {
   // The contact pairs' contacts of the last step, at most pair_contact_capacity(model) (so
   // much is reserved: a step allocates nothing).
   std::vector<PairContact> pair_contacts;
+  std::vector<NeedleState> needles;  // per Model::needles
 
   double dt = 0.0;         // s, the explicit step
   double stable_dt = 0.0;  // s, the stability estimate `dt: auto` takes its share of

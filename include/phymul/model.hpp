@@ -9,6 +9,7 @@
 #include <cassert>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -194,6 +195,47 @@ struct SpringSupport {
   double stiffness = 0.0;  // N/m, of each node's spring
 };
 
+// A material point of a volume cell: a combination of four of its nodes (one tetrahedron
+// of the cell), weights summing to one. Where a needle's track points and target sit.
+struct EmbeddedPoint {
+  std::array<int, 4> nodes{0, 0, 0, 0};  // global ids
+  std::array<double, 4> weights{1.0, 0.0, 0.0, 0.0};
+  Vec3 at(std::span<const Vec3> x) const {
+    Vec3 p = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) p += weights[size_t(k)] * x[size_t(nodes[size_t(k)])];
+    return p;
+  }
+};
+
+// A volume object a needle crosses, with its own parameters (DiMaio and Salcudean 2003).
+struct NeedleTissue {
+  int component = 0;
+  double puncture_force = 0.0;  // N: the tip's push at which the surface gives way
+  double friction = 0.0;        // N/m: kinetic friction per inserted length, along the shaft
+  double cutting_force = 0.0;   // N: on the tissue at the tip while the tip advances in it
+  // The component's cells as tetrahedra (hexahedra in 6, wedges in 3), global ids: where a
+  // point is found and embedded.
+  std::vector<std::array<int, 4>> tetrahedra;
+};
+
+// A straight rigid needle inserted along its axis (docs/needles.md): its tip at
+// base + depth(t) direction. It presses the surface of the next tissue like a point contact
+// until the push exceeds the tissue's puncture force; then points of the tissue met by the
+// tip every `spacing` of travel are embedded in their cells and held on the shaft laterally,
+// with stick-slip friction along it.
+struct Needle {
+  std::string name;                   // monitors columns: needle_<name>_...
+  Vec3 base = Vec3::Zero();           // m: the tip at depth 0
+  Vec3 direction = Vec3::UnitZ();     // unit (add_needle normalises it)
+  double radius = 0.0;                // m, for display
+  double spacing = 0.0;               // m of tip travel between track points
+  Schedule depth;                     // m in x over time
+  std::vector<NeedleTissue> tissues;  // in the order the needle meets them
+  int target_component = -1;          // -1: no target
+  EmbeddedPoint target;               // a point of target_component, moving with it
+  int track_capacity = 0;             // most track points at once (add_needle)
+};
+
 struct Component {
   std::string name;
   ObjectType kind = ObjectType::elastic;
@@ -260,6 +302,7 @@ struct Model {
   std::vector<std::array<int, 3>> doubled_leader;  // per group and axis: a held member or -1
   std::vector<int> rigid_body_of;                  // per node: body index or -1 (finalize)
   std::vector<ContactPair> contact_pairs;
+  std::vector<Needle> needles;
   // Per node and axis: 1/m where the node is free to move along that axis, 0 where a
   // position constraint holds it. The projection of global constraints moves nodes by it.
   std::vector<Vec3> inverse_mass;
@@ -299,6 +342,9 @@ void add_applied_force(Model& model, AppliedForce force);
 void add_spring_support(Model& model, SpringSupport springs);
 void add_pressure(Model& model, PressureLoad pressure);
 void add_rigid_obstacle(Model& model, RigidObstacle obstacle);
+// A needle (Needle): checks its parameters, splits its tissues' cells into tetrahedra and
+// sizes its track. Tissues must be volumetric, deformable components.
+void add_needle(Model& model, Needle needle);
 // Frictionless contact between two components with closed boundaries.
 void add_contact_pair(Model& model, int component_a, int component_b);
 // The boundary faces of `component` whose rest centroid lies within `radius` of the infinite

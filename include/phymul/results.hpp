@@ -47,6 +47,7 @@ class ResultWriter {
   bool vtk_;
   VtuEncoding encoding_;
   bool has_obstacles_;
+  bool has_needles_;  // <stem>_needles_<frame>.vtu beside each frame, <stem>_needles.pvd
   std::vector<int> closed_components_;
   std::vector<PvdEntry> pvd_;
   std::ofstream monitors_;

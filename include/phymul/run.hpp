@@ -35,6 +35,14 @@ struct RunOptions {
   long pause_after_steps = 0;
 };
 
+// A needle's tip through a tissue's surface (report.json's "needle_punctures").
+struct NeedlePuncture {
+  std::string needle, object;
+  double time = 0.0;   // s
+  double depth = 0.0;  // m
+  double force = 0.0;  // N, the push along the shaft that broke through
+};
+
 struct RunReport {
   std::string status = "completed";  // completed | unstable | not-converged | interrupted
   std::string message;
@@ -65,6 +73,9 @@ struct RunReport {
   Eigen::Vector3d applied_load = Eigen::Vector3d::Zero();      // N
   // Shape-memory objects given `young` (report.json has "stiffness_from_young" only then).
   std::vector<StiffnessCalibration> stiffness_calibrations;
+  // Scenes with needles (report.json has "needle_punctures" only then).
+  bool needles = false;
+  std::vector<NeedlePuncture> punctures;
 };
 
 // Compiles and runs the scene, writing into options.output_dir (created if missing; a

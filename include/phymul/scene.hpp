@@ -267,6 +267,36 @@ struct ContactSpec {
   SourceLoc loc;
 };
 
+// A tissue a needle may puncture, with its parameters (`needles[].tissues[]`).
+struct NeedleTissueSpec {
+  std::string object;
+  double puncture_force = 0.0;  // N
+  double friction = 0.0;        // N/m, along the shaft per inserted length
+  double cutting_force = 0.0;   // N
+  SourceLoc loc, object_loc;
+};
+
+// A point of an object that moves with it (`needles[].target`), whose distance to the tip
+// is monitored.
+struct NeedleTargetSpec {
+  std::string object;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();  // m, at rest
+  SourceLoc loc, object_loc;
+};
+
+// A straight rigid needle inserted along its axis (top-level `needles:`); see Needle.
+struct NeedleSpec {
+  std::string name;                                      // "" = needle<index>
+  Eigen::Vector3d base = Eigen::Vector3d::Zero();        // m, the tip at depth 0
+  Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();  // normalised
+  Schedule depth;                                        // m in x
+  double radius = 0.0005;                                // m
+  double spacing = 0.001;                                // m
+  std::vector<NeedleTissueSpec> tissues;
+  std::optional<NeedleTargetSpec> target;
+  SourceLoc loc;
+};
+
 // How a .vtu holds its numbers. `ascii`: text, each double in its shortest form that parses
 // back to the same bits (readable, diffable, well-formed XML). `binary`: VTK XML appended
 // raw data (UInt64 byte counts, little-endian), the same bits at a fraction of the time and
@@ -290,6 +320,7 @@ struct Scene {
   std::vector<PressureSpec> pressures;
   std::vector<ObstacleSpec> obstacles;
   std::vector<ContactSpec> contacts;
+  std::vector<NeedleSpec> needles;
   OutputSpec output;
 };
 

@@ -47,6 +47,7 @@ struct ContactStep {
   // the contacts their stages record (Data::pair_contacts).
   std::vector<PairContact>* pair_contacts = nullptr;
   std::span<Vec3> pair_impulse;  // N s, per contact pair: momentum given to its first component
+  std::vector<NeedleState>* needles = nullptr;  // Data::needles, when the model has needles
 };
 
 // Position stage with Coulomb friction: projects like apply_contacts, then cancels the

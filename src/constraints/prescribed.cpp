@@ -2,6 +2,7 @@
 #include "constraints/contact.hpp"
 #include "constraints/deformable_contact.hpp"
 #include "constraints/doubled.hpp"
+#include "constraints/needle.hpp"
 
 namespace phymul {
 
@@ -33,6 +34,7 @@ void apply_position_constraints(const Model& model, const Controls& controls, Wo
   if (!model.contact_pairs.empty())
     apply_deformable_contacts(model, x, work, *contact.pair_contacts, contact.dt,
                               contact.pair_impulse);
+  if (!model.needles.empty()) apply_needles(model, controls, x, load_time, contact);
   project_volumes(model, controls, work, x, load_time, scratch, contact.x_start);
   project_doubled(model, x);
 }

@@ -67,6 +67,15 @@ const std::vector<Section>& sections() {
       {"contact", "contacts[]",
        "Each entry of `contacts`: two deformable objects that may touch but not interpenetrate "
        "(frictionless, node against surface triangle)."},
+      {"needle", "needles[]",
+       "Each entry of `needles`: a straight rigid needle pushed along its axis into the "
+       "tissues it lists, in turn (docs/needles.md). Its tip presses a tissue's surface until "
+       "the push exceeds that tissue's `puncture_force`; then the tissue the tip meets is held "
+       "on the shaft, with friction along it. Dynamic mode only."},
+      {"needle_tissue", "needles[].tissues[]",
+       "A volume object the needle may puncture, with its own parameters."},
+      {"needle_target", "needles[].target",
+       "A point of an object, moving with it: monitors.csv gets its distance to the tip."},
       {"nodes", "nodes",
        "A node selector (`nodes:` of loads and constraints) is one of: omitted (all nodes), a "
        "node-set name of the generated mesh (`top`), an index list (`\"0-3,7\"`, `7`), a YAML "
@@ -146,6 +155,12 @@ std::vector<Parameter> scene_parameters() {
        .default_note = "none",
        .child = "contact",
        .doc = "Pairs of deformable objects in contact with each other."},
+      {.section = "scene",
+       .name = "needles",
+       .kind = Kind::list,
+       .default_note = "none",
+       .child = "needle",
+       .doc = "Needles inserted into the objects (biopsy, brachytherapy)."},
       {.section = "scene",
        .name = "output",
        .kind = Kind::map,
@@ -1005,10 +1020,11 @@ std::vector<Parameter> output_parameters() {
 const std::vector<Parameter>& parameters() {
   static const std::vector<Parameter> table = [] {
     std::vector<Parameter> all;
-    for (auto part : {scene_parameters(), simulation_parameters(), object_parameters(),
-                      mesh_parameters(), material_parameters(), load_parameters(),
-                      constraint_parameters(), schedule_parameters(), selector_parameters(),
-                      interaction_parameters(), output_parameters(), component_parameters()})
+    for (auto part :
+         {scene_parameters(), simulation_parameters(), object_parameters(), mesh_parameters(),
+          material_parameters(), load_parameters(), constraint_parameters(), schedule_parameters(),
+          selector_parameters(), interaction_parameters(), needle_parameters(), output_parameters(),
+          component_parameters()})
       all.insert(all.end(), part.begin(), part.end());
     return all;
   }();

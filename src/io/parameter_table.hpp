@@ -81,4 +81,7 @@ std::vector<const Parameter*> section_parameters(std::string_view section);
 
 std::string_view kind_name(Kind kind);
 
+// The fields of `needles` (parameter_table_needles.cpp), part of parameter_table().
+std::vector<Parameter> needle_parameters();
+
 }  // namespace phymul::io

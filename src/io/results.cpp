@@ -5,6 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "io/needle_output.hpp"
 #include "io/obstacle_surface.hpp"
 
 namespace phymul {
@@ -27,6 +28,11 @@ std::string json_string(const std::string& s) {
   return out + "\"";
 }
 
+// The needles' frames go beside the body's, at the same times (needle_output.hpp).
+std::string needle_frame_name(const std::string& stem, size_t frame) {
+  return fmt::format("{}_needles_{:06d}.vtu", stem, frame);
+}
+
 }  // namespace
 
 ResultWriter::ResultWriter(std::filesystem::path dir, std::string stem, const Model& model,
@@ -35,7 +41,8 @@ ResultWriter::ResultWriter(std::filesystem::path dir, std::string stem, const Mo
       stem_(std::move(stem)),
       vtk_(vtk),
       encoding_(encoding),
-      has_obstacles_(!model.obstacles.empty()) {
+      has_obstacles_(!model.obstacles.empty()),
+      has_needles_(!model.needles.empty()) {
   for (int c = 0; c < int(model.components.size()); ++c)
     if (!model.components[c].boundary.empty()) closed_components_.push_back(c);
   const auto path = dir_ / "monitors.csv.tmp";
@@ -57,6 +64,7 @@ ResultWriter::ResultWriter(std::filesystem::path dir, std::string stem, const Mo
                               model.components[size_t(pair.components[1])].name;
     for (const char* axis : {"x", "y", "z"}) header += ",contact_" + label + '_' + axis + "_N";
   }
+  header += needle_monitor_header(model);
   write_monitors(header + '\n');
   const size_t n = model.rest_position.size() * 3;
   displacement_.resize(n);
@@ -78,6 +86,7 @@ void ResultWriter::frame(const Model& m, const Data& s) {
   const std::string name = fmt::format("{}_{:06d}.vtu", stem_, pvd_.size());
   write_vtu(dir_ / name, s.x, m.cells, points, cells, encoding_);
   write_obstacles(m, s, int(pvd_.size()));
+  if (has_needles_) write_needle_frame(dir_ / needle_frame_name(stem_, pvd_.size()), m, s);
   pvd_.push_back({s.time, name});
   series_stale_ = true;
   const auto now = std::chrono::steady_clock::now();
@@ -91,6 +100,12 @@ void ResultWriter::frame(const Model& m, const Data& s) {
 void ResultWriter::write_series() {
   write_pvd(dir_ / (stem_ + ".pvd"), pvd_);
   write_obstacle_pvd();
+  if (has_needles_) {
+    std::vector<PvdEntry> entries;
+    for (size_t k = 0; k < pvd_.size(); ++k)
+      entries.push_back({pvd_[k].time, needle_frame_name(stem_, k)});
+    write_pvd(dir_ / (stem_ + "_needles.pvd"), entries);
+  }
   series_stale_ = false;
 }
 
@@ -136,6 +151,7 @@ void ResultWriter::monitor(const Model& m, Data& s) {
     row += fmt::format(",{}", (s.bodies[b].center - m.rigid_bodies[b].rest_center).norm());
   for (const Vec3& f : s.contact_force) row += fmt::format(",{},{},{}", f.x(), f.y(), f.z());
   for (const Vec3& f : s.pair_contact_force) row += fmt::format(",{},{},{}", f.x(), f.y(), f.z());
+  row += needle_monitor_row(m, s);
   write_monitors(row + '\n');
   monitored_time_ = s.time;
 }
@@ -154,6 +170,7 @@ void ResultWriter::restore(std::vector<PvdEntry> frames, const std::string& moni
   for (size_t k = 0; k < frames.size() && vtk_; ++k) {
     require(frames[k].file);
     if (has_obstacles_) require(obstacle_frame_name(stem_, k));
+    if (has_needles_) require(needle_frame_name(stem_, k));
   }
   pvd_ = std::move(frames);
   const auto path = dir_ / "monitors.csv.tmp";
@@ -207,6 +224,21 @@ std::string calibration_fields(const RunReport& r) {
   return s + "\n  ]";
 }
 
+// Each needle's punctures (RunReport::punctures), in scenes with needles.
+std::string puncture_fields(const RunReport& r) {
+  if (!r.needles) return "";
+  std::string s = ",\n  \"needle_punctures\": [";
+  for (size_t k = 0; k < r.punctures.size(); ++k) {
+    const NeedlePuncture& p = r.punctures[k];
+    s += fmt::format(
+        "{}\n    {{\"needle\": {}, \"object\": {}, \"time_s\": {}, \"depth_m\": {}, "
+        "\"force_N\": {}}}",
+        k ? "," : "", json_string(p.needle), json_string(p.object), json_number(p.time),
+        json_number(p.depth), json_number(p.force));
+  }
+  return s + (r.punctures.empty() ? "]" : "\n  ]");
+}
+
 }  // namespace
 
 std::string report_json(const RunReport& r) {
@@ -217,13 +249,13 @@ std::string report_json(const RunReport& r) {
       "\"step_wall_time_s\": {},\n  \"stepping_real_time_factor\": {},\n  \"dt_s\": {},\n"
       "  \"stable_dt_s\": {},\n  \"nodes\": {},\n  \"threads\": {},\n  \"frames\": {},\n"
       "  \"converged\": {},\n"
-      "  \"final_residual_force_N\": {}{}{}\n}}\n",
+      "  \"final_residual_force_N\": {}{}{}{}\n}}\n",
       json_string(r.status), json_string(r.message), json_string(r.mode), r.steps,
       json_number(r.simulated_time), json_number(r.wall_time), json_number(r.ns_per_node_per_step),
       json_number(r.real_time_factor), json_number(r.step_wall_time),
       json_number(r.stepping_real_time_factor), json_number(r.dt), json_number(r.stable_dt),
       r.nodes, r.threads, r.frames, r.converged ? "true" : "false", json_number(r.residual),
-      newton_fields(r), calibration_fields(r));
+      newton_fields(r), calibration_fields(r), puncture_fields(r));
 }
 
 }  // namespace phymul

@@ -11,6 +11,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "io/needle_output.hpp"
 #include "io/run_checkpoint.hpp"
 #include "io/run_newton.hpp"
 #include "io/units.hpp"
@@ -279,6 +280,8 @@ RunReport run_scene(const Scene& scene, const RunOptions& options) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   report.simulated_time = sim.data().time;
   report.frames = out.frames();
+  report.needles = !model.needles.empty();
+  report.punctures = needle_punctures(model, sim.data());
   const long steps_here = sim.data().step - (from ? from->data.step : 0);
   if (steps_here > 0)
     report.ns_per_node_per_step =

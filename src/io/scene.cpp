@@ -224,6 +224,8 @@ Scene SceneBuilder::build(const YAML::Node& root, const std::string& file) {
   });
   top.items("contacts",
             [&](SectionReader& r) { scene.contacts.push_back(io::read_contact(r, interactions)); });
+  top.items("needles",
+            [&](SectionReader& r) { scene.needles.push_back(io::read_needle(r, interactions)); });
   for (auto& reference : interactions)
     references_.push_back({reference.name, reference.loc, reference.where});
   if (auto reader = top.map("output")) scene.output = output(*reader);

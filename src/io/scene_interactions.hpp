@@ -24,5 +24,7 @@ void read_pressure_fields(SectionReader& reader, PressureSpec& spec);
 // One entry of `obstacles` / `contacts`; the object names go to `references`.
 ObstacleSpec read_obstacle(SectionReader& reader, std::vector<ObjectReference>& references);
 ContactSpec read_contact(SectionReader& reader, std::vector<ObjectReference>& references);
+// One entry of `needles`: its tissues' and target's object names go to `references`.
+NeedleSpec read_needle(SectionReader& reader, std::vector<ObjectReference>& references);
 
 }  // namespace phymul::io

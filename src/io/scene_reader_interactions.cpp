@@ -203,4 +203,47 @@ ContactSpec read_contact(SectionReader& reader, std::vector<ObjectReference>& re
   return spec;
 }
 
+namespace {
+
+// An `object` field that names an object, checked against the objects once all are read.
+void refer_object(SectionReader& reader, std::string& object, SourceLoc& at,
+                  std::vector<ObjectReference>& references) {
+  if (!reader.read("object", object)) return;
+  at = *reader.value_loc("object");
+  references.push_back({object, at, reader.where()});
+}
+
+}  // namespace
+
+NeedleSpec read_needle(SectionReader& reader, std::vector<ObjectReference>& references) {
+  NeedleSpec spec;
+  spec.loc = reader.loc();
+  reader.read("name", spec.name);
+  reader.read("base", spec.base);
+  read_direction(reader.context(), reader, "direction", spec.direction);
+  reader.read_scalar("depth", spec.depth);
+  reader.read("radius", spec.radius);
+  reader.read("spacing", spec.spacing);
+  reader.items("tissues", [&](SectionReader& r) {
+    NeedleTissueSpec t;
+    t.loc = r.loc();
+    refer_object(r, t.object, t.object_loc, references);
+    r.read("puncture_force", t.puncture_force);
+    r.read("friction", t.friction);
+    r.read("cutting_force", t.cutting_force);
+    r.done();
+    spec.tissues.push_back(std::move(t));
+  });
+  if (auto r = reader.map("target"); r && reader.value_loc("target")) {
+    NeedleTargetSpec t;
+    t.loc = r->loc();
+    refer_object(*r, t.object, t.object_loc, references);
+    r->read("point", t.point);
+    r->done();
+    spec.target = std::move(t);
+  }
+  reader.done();
+  return spec;
+}
+
 }  // namespace phymul::io

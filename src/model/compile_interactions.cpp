@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <set>
 
+#include "model/embedding.hpp"
+
 namespace phymul {
 namespace {
 
@@ -93,6 +95,51 @@ void compile_obstacles(const Scene& scene, Model& model, std::vector<Diagnostic>
   }
 }
 
+// The target at rest, embedded in a cell of its object; false (diagnosed) when outside it.
+bool compile_target(const NeedleTargetSpec& spec, const Model& model, Needle& n,
+                    std::vector<Diagnostic>& problems) {
+  const int c = component_index(model, spec.object);
+  if (c < 0) return false;  // reported by the reader's reference check
+  const auto tetrahedra = cell_tetrahedra(model, c);
+  if (!embed_point(tetrahedra, model.rest_position, spec.point, n.target)) {
+    problems.push_back(
+        {spec.loc, fmt::format("target point [{}, {}, {}] m is not inside a "
+                               "volume cell of '{}' at rest",
+                               spec.point.x(), spec.point.y(), spec.point.z(), spec.object)});
+    return false;
+  }
+  n.target_component = c;
+  return true;
+}
+
+void compile_needle(const NeedleSpec& spec, int index, Model& model,
+                    std::vector<Diagnostic>& problems) {
+  if (model.settings.mode != SolveMode::dynamic) {
+    problems.push_back({spec.loc,
+                        "needles need dynamic mode (simulation.mode: dynamic): "
+                        "insertion is a history of punctures and friction"});
+    return;
+  }
+  Needle n;
+  n.name = spec.name.empty() ? fmt::format("needle{}", index) : spec.name;
+  n.base = spec.base;
+  n.direction = spec.direction;
+  n.depth = spec.depth;
+  n.radius = spec.radius;
+  n.spacing = spec.spacing;
+  for (const NeedleTissueSpec& t : spec.tissues) {
+    const int c = component_index(model, t.object);
+    if (c < 0) return;  // reported by the reader's reference check
+    n.tissues.push_back({c, t.puncture_force, t.friction, t.cutting_force, {}});
+  }
+  if (spec.target && !compile_target(*spec.target, model, n, problems)) return;
+  try {
+    add_needle(model, std::move(n));
+  } catch (const std::exception& e) {
+    problems.push_back({spec.loc, e.what()});
+  }
+}
+
 }  // namespace
 
 void compile_interactions(const Scene& scene, Model& model, std::vector<Diagnostic>& problems,
@@ -107,6 +154,15 @@ void compile_interactions(const Scene& scene, Model& model, std::vector<Diagnost
     } catch (const std::exception& e) {
       problems.push_back({c.loc, e.what()});
     }
+  }
+  std::set<std::string> needle_names;
+  for (size_t k = 0; k < scene.needles.size(); ++k) {
+    const NeedleSpec& n = scene.needles[k];
+    const std::string name = n.name.empty() ? fmt::format("needle{}", k) : n.name;
+    if (!needle_names.insert(name).second)
+      problems.push_back({n.loc, fmt::format("needle name '{}' is used twice", name)});
+    else
+      compile_needle(n, int(k), model, problems);
   }
 }
 

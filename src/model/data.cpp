@@ -49,6 +49,20 @@ void init_controls(const Model& model, Controls& c) {
     c.body_translation.push_back(b.translation);
     c.body_rotation.push_back(b.rotation);
   }
+  for (const Needle& n : model.needles) c.needle_depth.push_back(n.depth);
+}
+
+// Each needle untouched, its track and events reserved at their most: a step allocates
+// nothing.
+void init_needles(const Model& model, Data& d) {
+  d.needles.resize(model.needles.size());
+  for (size_t k = 0; k < model.needles.size(); ++k) {
+    NeedleState& s = d.needles[k];
+    s.phase.assign(model.needles[k].tissues.size(), needle_outside);
+    s.track.reserve(size_t(model.needles[k].track_capacity));
+    s.punctures.reserve(kMaxPunctures);
+    s.depth = s.last_point_depth = model.needles[k].depth.at(0.0).x();
+  }
 }
 
 // Every buffer a step uses, at its size: a step allocates nothing.
@@ -101,13 +115,20 @@ void compare_shape(const T& made, const T& got, const std::string& path, std::st
       return;
     }
     if constexpr (fields::is_vector<typename T::value_type> ||
-                  std::is_same_v<typename T::value_type, Schedule>)
+                  std::is_same_v<typename T::value_type, Schedule> ||
+                  std::is_same_v<typename T::value_type, NeedleState>)
       for (size_t k = 0; k < made.size(); ++k)
         compare_shape(made[k], got[k], fmt::format("{}[{}]", path, k), mismatch);
   } else if constexpr (std::is_same_v<T, Schedule>) {
     if (got.times.size() != got.values.size())
       mismatch =
           fmt::format("'{}' has {} times and {} values", path, got.times.size(), got.values.size());
+  } else if constexpr (std::is_same_v<T, NeedleState>) {
+    fields::for_each_pair(made, got, [&](std::string_view name, const auto& a, const auto& b) {
+      using M = std::remove_cvref_t<decltype(a)>;
+      if constexpr (fields::is_vector<M>)
+        compare_shape(a, b, path + "." + std::string(name), mismatch);
+    });
   } else if constexpr (std::is_same_v<T, Controls>) {
     fields::for_each_pair(made, got, [&](std::string_view name, const auto& a, const auto& b) {
       if (name == "applied_force") return;  // checked with Data's node count below
@@ -160,6 +181,7 @@ Data allocate_data(const Model& model) {
   d.pair_contact_force.assign(model.contact_pairs.size(), Vec3::Zero());
   if (!model.obstacles.empty()) d.obstacle_touching.assign(n, -1);
   d.pair_contacts.reserve(pair_contact_capacity(model));
+  init_needles(model, d);
   init_controls(model, d.controls);
   allocate_workspace(model, *d.work);
   return d;

@@ -22,6 +22,27 @@ struct FieldNames<PairContact> {
 };
 
 template <>
+struct FieldNames<EmbeddedPoint> {
+  static constexpr const char* names[] = {"nodes", "weights"};
+};
+
+template <>
+struct FieldNames<TrackPoint> {
+  static constexpr const char* names[] = {"tissue", "point", "anchor", "length"};
+};
+
+template <>
+struct FieldNames<PunctureEvent> {
+  static constexpr const char* names[] = {"tissue", "time", "depth", "force"};
+};
+
+template <>
+struct FieldNames<NeedleState> {
+  static constexpr const char* names[] = {
+      "phase", "contact", "track", "depth", "last_point_depth", "tip_tissue", "force", "punctures"};
+};
+
+template <>
 struct FieldNames<StaticProgress> {
   static constexpr const char* names[] = {"load_step",        "iterations", "step_iterations",
                                           "previous_kinetic", "fire_alpha", "fire_downhill"};
@@ -35,7 +56,8 @@ struct FieldNames<Schedule> {
 template <>
 struct FieldNames<Controls> {
   static constexpr const char* names[] = {"applied_force", "obstacle_motion",  "pressure",
-                                          "target_volume", "body_translation", "body_rotation"};
+                                          "target_volume", "body_translation", "body_rotation",
+                                          "needle_depth"};
 };
 
 template <>
@@ -52,6 +74,7 @@ struct FieldNames<Data> {
                                           "pair_contact_force",
                                           "obstacle_touching",
                                           "pair_contacts",
+                                          "needles",
                                           "dt",
                                           "stable_dt",
                                           "load_time",

@@ -23,8 +23,8 @@ std::string implicit_static_at(const SimulationSpec& s) {
 }
 
 constexpr const char* kTakes =
-    "it takes elastic shape-memory objects with gravity, 'force' loads, pressures, 'fixed' and "
-    "'displacement' constraints, stitches, doubled nodes and volume constraints; use "
+    "it takes elastic shape-memory objects with gravity, 'force' loads, pressures, 'fixed', "
+    "'displacement' and 'spring' constraints, stitches, doubled nodes and volume constraints; use "
     "'integrator: verlet'";
 
 template <class Spec>
@@ -57,6 +57,7 @@ void check_implicit_scene(const Scene& scene, std::vector<Diagnostic>& problems)
   }
   refuse_all(scene.obstacles, "obstacles", at, problems);
   refuse_all(scene.contacts, "contacts", at, problems);
+  refuse_all(scene.needles, "needles", at, problems);
 }
 
 }  // namespace phymul

@@ -243,3 +243,25 @@ TEST(Simulator, ProstateStudyStepsDoNotAllocateOnOneThread) {
 
 }  // namespace
 }  // namespace phymul
+
+namespace phymul {
+namespace {
+
+// A needle through the pressing, the puncture and the track's growth: its track and events
+// live in storage reserved when the Data was made.
+TEST(Simulator, NeedleStepsDoNotAllocate) {
+  if (!PHYMUL_COUNT_ALLOCATIONS) GTEST_SKIP() << "allocations are counted in the normal build only";
+  Simulator sim(compile_scene(load_scene(testing::source_dir() / "examples/prostate/biopsy.yaml")));
+  while (sim.data().time < 0.9) sim.step();  // the tip presses the gland from 0.66 s on
+  allocations = 0;
+  c_allocations = 0;
+  counting = true;
+  while (sim.data().time < 1.4) sim.step();
+  counting = false;
+  EXPECT_EQ(allocations.load() + c_allocations.load(), 0);
+  EXPECT_EQ(sim.data().needles[0].punctures.size(), 1u);
+  EXPECT_GE(sim.data().needles[0].track.size(), 3u);
+}
+
+}  // namespace
+}  // namespace phymul

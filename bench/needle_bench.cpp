@@ -1,0 +1,41 @@
+// The biopsy scene (examples/prostate/biopsy.yaml) stepped on one thread with the needle in
+// the gland: ns per node per step and the real-time factor dt / (time per step), which must
+// reach 1 for the scene to run as fast as real time on one core. real_time_factor counts
+// wall-clock time, cpu_real_time_factor this thread's CPU time (a busy machine's share).
+#include <benchmark/benchmark.h>
+#include <omp.h>
+
+#include <chrono>
+
+#include "phymul/scene_io.hpp"
+#include "phymul/simulation.hpp"
+#include "thread_cpu_time.hpp"
+
+namespace {
+
+using namespace phymul;
+
+void BM_BiopsyStep(benchmark::State& state) {
+  omp_set_num_threads(1);
+  Simulator sim(compile_scene(load_scene(PHYMUL_SOURCE_DIR "/examples/prostate/biopsy.yaml")));
+  // Past the puncture (about 1.16 s), the needle going on into the gland, then held there.
+  while (sim.data().time < 1.3) sim.step();
+  const auto start = std::chrono::steady_clock::now();
+  const double cpu_start = thread_cpu_seconds();
+  for (auto _ : state) sim.step();
+  const double cpu = thread_cpu_seconds() - cpu_start;
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double steps = double(state.iterations()), nodes = sim.model().node_count();
+  state.counters["nodes"] = nodes;
+  state.counters["track_points"] = double(sim.data().needles[0].track.size());
+  state.counters["ns_per_node_step"] = seconds * 1e9 / (nodes * steps);
+  state.counters["dt_us"] = sim.dt() * 1e6;
+  state.counters["real_time_factor"] = sim.dt() * steps / seconds;
+  state.counters["cpu_real_time_factor"] = sim.dt() * steps / cpu;
+}
+BENCHMARK(BM_BiopsyStep)->Unit(benchmark::kMicrosecond)->MinTime(1.0);
+
+}  // namespace
+
+BENCHMARK_MAIN();
