@@ -426,7 +426,8 @@ TEST(SceneTest, ReferenceMarkdownHasARowForEveryFieldOfTheTable) {
     EXPECT_NE(markdown.find(std::string(parameter.doc)), std::string::npos) << parameter.name;
   }
   EXPECT_NE(markdown.find("| `dt` | quantity or `auto` | s | > 0 | `auto` |"), std::string::npos);
-  EXPECT_NE(markdown.find("| `integrator` | enum | — | `verlet`, `newton-cotes`, `implicit` | `verlet` |"),
+  EXPECT_NE(markdown.find(
+                "| `integrator` | enum | — | `verlet`, `newton-cotes`, `implicit` | `verlet` |"),
             std::string::npos);
 }
 
