@@ -170,7 +170,9 @@ TEST(Needle, TheForceOnTheNeedleIsMinusTheForceOnTheTissue) {
     scale += state(sim).force.norm() * sim.data().dt;
     Vec3 momentum = Vec3::Zero();
     for (int i = 0; i < m.node_count(); ++i) momentum += m.mass[i] * sim.data().v[i];
-    ASSERT_LT((momentum - impulse).norm(), 1e-9 * scale + 1e-15) << sim.data().time;
+    // Before contact the shape memory's roundoff alone moves the free block: 1e-13 N s is a
+    // picometre per second on its mass, below any needle force here.
+    ASSERT_LT((momentum - impulse).norm(), 1e-9 * scale + 1e-13) << sim.data().time;
   }
   EXPECT_EQ(state(sim).punctures.size(), 1u);
   EXPECT_GT(scale, 1e-3);
