@@ -65,26 +65,30 @@ void remove_volume_pressures(const Model& model, Workspace& work, std::span<cons
   }
 }
 
-// The nodes touching an obstacle into work.contacts: on the surface, or put on it by the
-// last step's contact stage (the volume projection after it may have moved the node off by a
-// hair).
+// The nodes touching obstacle k at `time`, appended to `contacts`: on its surface, or put on
+// it by the last step's contact stage (the volume projection after it may have moved the node
+// off by a hair).
+void add_touching_nodes(const Model& model, const Data& d, int k, double time,
+                        std::vector<ObstacleContact>& contacts) {
+  const RigidObstacle& o = model.obstacles.at(size_t(k));  // obstacle_force takes any index
+  // The obstacle where the controls put it: its own motion unless a program moved it.
+  const Schedule& motion = d.controls.obstacle_motion[size_t(k)];
+  auto add = [&](int i) {
+    const SurfaceDistance distance = obstacle_distance(o, motion, d.x[size_t(i)], time);
+    const bool moved = !d.obstacle_touching.empty() && d.obstacle_touching[size_t(i)] == k;
+    if (std::abs(distance.distance) > kTouching && !moved) return;
+    contacts.push_back({i, o.keep_inside ? Vec3(-distance.normal) : distance.normal, o.friction});
+  };
+  if (o.nodes.empty())
+    for (int i = 0; i < model.node_count(); ++i) add(i);
+  else
+    for (int i : o.nodes) add(i);
+}
+
 void find_obstacle_contacts(const Model& model, Data& d) {
-  std::vector<ObstacleContact>& contacts = d.work->contacts;
-  contacts.clear();
-  for (const RigidObstacle& o : model.obstacles) {
-    // The obstacle where the controls put it: its own motion unless a program moved it.
-    const Schedule& motion = d.controls.obstacle_motion[size_t(&o - model.obstacles.data())];
-    auto add = [&](int i) {
-      const SurfaceDistance distance = obstacle_distance(o, motion, d.x[i], d.load_time);
-      const bool moved = d.obstacle_touching[size_t(i)] == int(&o - model.obstacles.data());
-      if (std::abs(distance.distance) > kTouching && !moved) return;
-      contacts.push_back({i, o.keep_inside ? Vec3(-distance.normal) : distance.normal, o.friction});
-    };
-    if (o.nodes.empty())
-      for (int i = 0; i < model.node_count(); ++i) add(i);
-    else
-      for (int i : o.nodes) add(i);
-  }
+  d.work->contacts.clear();
+  for (int k = 0; k < int(model.obstacles.size()); ++k)
+    add_touching_nodes(model, d, k, d.load_time, d.work->contacts);
 }
 
 // A node touching an obstacle can be pushed into it with any force: that part of its
@@ -271,21 +275,10 @@ Vec3 obstacle_force(const Model& model, const Data& d, int obstacle) {
   // the contact's force.
   Workspace work = *d.work;
   work.contacts.clear();
-  const RigidObstacle& o = model.obstacles.at(size_t(obstacle));
-  const Schedule& motion = d.controls.obstacle_motion[size_t(obstacle)];
+  add_touching_nodes(model, d, obstacle, d.time, work.contacts);
   std::vector<Vec3> r(d.f.size()), grad(d.x.size(), Vec3::Zero());
   for (int i = 0; i < model.node_count(); ++i)
     r[size_t(i)] = d.f[size_t(i)].cwiseProduct(free_axes(model.inverse_mass[size_t(i)]));
-  auto add = [&](int i) {
-    const SurfaceDistance s = obstacle_distance(o, motion, d.x[size_t(i)], d.time);
-    const bool moved = !d.obstacle_touching.empty() && d.obstacle_touching[size_t(i)] == obstacle;
-    if (std::abs(s.distance) <= kTouching || moved)
-      work.contacts.push_back({i, o.keep_inside ? Vec3(-s.normal) : s.normal, o.friction});
-  };
-  if (o.nodes.empty())
-    for (int i = 0; i < model.node_count(); ++i) add(i);
-  else
-    for (int i : o.nodes) add(i);
   remove_volume_pressures(model, work, d.x, r, grad, /*on_free_axes=*/true, work.contacts);
   Vec3 force = Vec3::Zero();
   for (const ObstacleContact& c : work.contacts) force -= r[size_t(c.node)];
