@@ -5,8 +5,6 @@
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
-#include <chrono>
-
 #include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
 #include "thread_cpu_time.hpp"
@@ -20,19 +18,8 @@ void BM_BiopsyStep(benchmark::State& state) {
   Simulator sim(compile_scene(load_scene(PHYMUL_SOURCE_DIR "/examples/prostate/biopsy.yaml")));
   // Past the puncture (about 1.16 s), the needle going on into the gland, then held there.
   while (sim.data().time < 1.3) sim.step();
-  const auto start = std::chrono::steady_clock::now();
-  const double cpu_start = thread_cpu_seconds();
-  for (auto _ : state) sim.step();
-  const double cpu = thread_cpu_seconds() - cpu_start;
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const double steps = double(state.iterations()), nodes = sim.model().node_count();
-  state.counters["nodes"] = nodes;
+  time_steps(state, sim);
   state.counters["track_points"] = double(sim.data().needles[0].track.size());
-  state.counters["ns_per_node_step"] = seconds * 1e9 / (nodes * steps);
-  state.counters["dt_us"] = sim.dt() * 1e6;
-  state.counters["real_time_factor"] = sim.dt() * steps / seconds;
-  state.counters["cpu_real_time_factor"] = sim.dt() * steps / cpu;
 }
 BENCHMARK(BM_BiopsyStep)->Unit(benchmark::kMicrosecond)->MinTime(1.0);
 

@@ -30,21 +30,10 @@ void BM_ProstateStep(benchmark::State& state) {
   Simulator sim(compile_scene(parse_scene(prostate::scene_text(options, scene), "bench.yaml")));
   // Past the settling, into the probe's push (0.2 s of load time onwards).
   while (sim.data().time < 0.3) sim.step();
-  const auto start = std::chrono::steady_clock::now();
-  const double cpu_start = thread_cpu_seconds();
-  for (auto _ : state) sim.step();
-  const double cpu = thread_cpu_seconds() - cpu_start;
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const double steps = double(state.iterations()), nodes = sim.model().node_count();
+  time_steps(state, sim);
   double mass = 0.0;
   for (double m : sim.model().mass) mass += m;
-  state.counters["nodes"] = nodes;
-  state.counters["ns_per_node_step"] = seconds * 1e9 / (nodes * steps);
-  state.counters["dt_us"] = sim.dt() * 1e6;
   state.counters["added_mass_pct"] = 100.0 * sim.added_inertia() / mass;
-  state.counters["real_time_factor"] = sim.dt() * steps / seconds;
-  state.counters["cpu_real_time_factor"] = sim.dt() * steps / cpu;
 }
 BENCHMARK(BM_ProstateStep)
     ->ArgsProduct({{50, 100, 200, 300, 400}, {0, 1}, {0, 1}})
