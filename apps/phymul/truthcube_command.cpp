@@ -21,6 +21,7 @@ struct Settings {
   std::string json_file;
   std::string frame = "polar";
   std::string fem_hexa = "mean-dilatation";
+  std::string solver = "relaxation";
   bool no_reaction = false, no_volume = false, no_fem = false, no_pictures = false;
   bool quiet = false;
 };
@@ -30,6 +31,7 @@ int run(Settings& s) {
   s.study.reaction = !s.no_reaction;
   s.study.volume_constraint = !s.no_volume;
   s.study.fem = !s.no_fem;
+  s.study.solver = s.solver == "implicit" ? StaticSolver::implicit : StaticSolver::relaxation;
   s.study.incompatible_modes = s.fem_hexa == "incompatible";
   try {
     if (s.data.empty())
@@ -68,6 +70,10 @@ Command add_truthcube_command(CLI::App& parent) {
   app->add_option("--json", s.json_file, "also write the table as JSON to this file");
   app->add_option("--frame", s.frame, "shape-memory frame")
       ->check(CLI::IsMember({"polar", "frame"}))
+      ->capture_default_str();
+  app->add_option("--solver", s.solver,
+                  "shape-memory equilibria: FIRE relaxation or the implicit static solver")
+      ->check(CLI::IsMember({"relaxation", "implicit"}))
       ->capture_default_str();
   app->add_flag("--no-reaction", s.no_reaction, "the paper's force on the node alone");
   app->add_flag("--no-volume", s.no_volume, "no volume constraint on the shape-memory model");

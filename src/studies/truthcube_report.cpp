@@ -22,10 +22,12 @@ std::string table(const Study& study, const StudyOptions& o) {
   std::ostringstream s;
   s << fmt::format(
       "Truth Cube: {}^3 hexahedra, plates {}, shape memory '{}' frame, reaction {}, volume "
-      "constraint {}; FEM Neo-Hookean E = {:.4g} kPa, nu = {}\n",
+      "constraint {}{}; FEM Neo-Hookean E = {:.4g} kPa, nu = {}\n",
       o.cells, o.sliding ? "sliding" : "holding without slip",
       o.frame == FrameMode::polar ? "polar" : "frame", o.reaction ? "on" : "off",
-      o.volume_constraint ? "on" : "off", o.young / 1e3, o.poisson);
+      o.volume_constraint ? "on" : "off",
+      o.solver == StaticSolver::implicit ? ", implicit static solver" : "", o.young / 1e3,
+      o.poisson);
   s << "strain  model  mean err  max err  eq.(1) mean  sum ratio  eq.(1) translated  "
        "paper Phymul  paper ANSYS  plate force\n";
   for (const LevelResult& r : study.results) {

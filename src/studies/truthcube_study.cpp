@@ -55,6 +55,7 @@ void run_shape_memory(const Study& study, const std::vector<Bead>& beads,
   model.settings.max_iterations = 400000;
   model.settings.mode = SolveMode::static_equilibrium;  // relaxation masses (Simulator)
   model.settings.relaxation = Relaxation::fire;
+  model.settings.solver = options.solver;
   finalize(model);
   Simulator sim(model);
   for (int l = 0; l < kLevels; ++l) {

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <fstream>
 
 #include "support/process.hpp"
@@ -109,6 +111,32 @@ TEST(TruthCube, ShapeMemoryStudyBeatsStandingStillAndKeepsVolume) {
     double volume = 0.0;
     for (const Cell& c : with_volume.mesh.cells) volume += cell_measure(r.positions, c);
     EXPECT_LT(std::abs(volume / rest_volume - 1.0), 1e-10) << l;
+  }
+}
+
+// The implicit static solver lands on the relaxation's equilibria (DESIGN: the same energy) at
+// every level, both tightly converged, with far fewer passes over the forces.
+TEST(TruthCube, ImplicitStaticsFindTheRelaxationsEquilibria) {
+  const auto beads = load_beads(data_file());
+  StudyOptions o;
+  o.fem = false;
+  o.tolerance = 1e-10;
+  const Study relaxed = run_study(beads, o);
+  o.solver = StaticSolver::implicit;
+  const Study implicit = run_study(beads, o);
+  ASSERT_EQ(implicit.results.size(), relaxed.results.size());
+  for (size_t l = 0; l < relaxed.results.size(); ++l) {
+    const LevelResult &a = relaxed.results[l], &b = implicit.results[l];
+    double largest = 0.0, gap = 0.0;
+    for (size_t i = 0; i < a.positions.size(); ++i) {
+      largest = std::max(largest, (a.positions[i] - relaxed.mesh.points[i]).norm());
+      gap = std::max(gap, (a.positions[i] - b.positions[i]).norm());
+    }
+    EXPECT_GT(largest, 0.0039) << l;  // the plate moves 4 to 14.6 mm
+    EXPECT_LT(gap, 1e-6 * largest) << l;
+    EXPECT_NEAR(b.plate_force, a.plate_force, 1e-6 * a.plate_force) << l;
+    std::printf("level %zu: gap %.3g of %.3g m; relaxation %ld, implicit %ld iterations\n", l, gap,
+                largest, a.iterations, b.iterations);
   }
 }
 

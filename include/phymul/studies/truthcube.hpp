@@ -77,6 +77,9 @@ struct StudyOptions {
   // displacement). On 8^3 cells, relaxing on from 1e-7 to 1e-9 moves no bead by more than
   // 0.15 um (measured), far below the 0.3 mm noise of the beads.
   double tolerance = 1e-7;
+  // How the shape memory reaches each equilibrium: FIRE relaxation, or the implicit static
+  // solver's local/global iterations (the same equilibria, in far fewer passes).
+  StaticSolver solver = StaticSolver::relaxation;
 };
 
 struct LevelResult {
