@@ -110,6 +110,7 @@ std::string scene_text(const Options& o, const SceneSettings& s) {
                      s.probe == Probe::rigid || o.support == Support::bladder ? o.contact_tolerance
                                                                               : o.tolerance,
                      s.load_steps, "kinetic");
+  if (!s.dynamic && o.static_solver == StaticSolver::implicit) t += "  solver: implicit\n";
   t += fmt::format("  duration: {:.17g} s\n  gravity: [0, 0, {:.17g} m/s^2]\n", s.duration,
                    -o.gravity);
   t += "objects:\n";

@@ -5,11 +5,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 #include "phymul/forces.hpp"
 #include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
+#include "solver/implicit_step.hpp"
 
 namespace phymul::prostate {
 namespace {
@@ -142,6 +144,67 @@ TEST(ProstateStudy, WithAFiniteElementProstateTheEmptyBladderCaseDeformsMore) {
   const FillingResult full = run_filling(o, kFull, Probe::pressure);
   EXPECT_GT(empty.prostate_deformation_pct, full.prostate_deformation_pct + 0.1);
   EXPECT_NEAR(full.bladder_volume, kFull, 1e-10 * kFull);
+}
+
+// The implicit static solver on the study's pressure-probe scenes lands on the kinetic
+// relaxation's equilibria (the same energy), both relaxed to 1e-10 N.
+TEST(ProstateStudy, TheImplicitStaticSolverFindsTheRelaxationsEquilibria) {
+  Options o;
+  o.probes = {Probe::pressure};
+  o.tolerance = 1e-10;
+  for (double filling : {kEmpty, kFull}) {
+    const FillingResult relaxed = run_filling(o, filling, Probe::pressure);
+    Options implicit = o;
+    implicit.static_solver = StaticSolver::implicit;
+    const FillingResult r = run_filling(implicit, filling, Probe::pressure);
+    double pushed = 0.0, gap = 0.0;
+    for (size_t i = 0; i < r.after.size(); ++i) {
+      pushed = std::max(pushed, (relaxed.after[i] - relaxed.before[i]).norm());
+      gap = std::max(gap, (r.after[i] - relaxed.after[i]).norm());
+    }
+    EXPECT_GT(pushed, 1e-3) << filling;  // the probe moves the prostate by millimetres
+    EXPECT_LT(gap, 1e-6 * pushed) << filling;
+    EXPECT_NEAR(r.prostate_deformation_pct, relaxed.prostate_deformation_pct, 1e-4) << filling;
+    EXPECT_LT(r.iterations * 20, relaxed.iterations) << filling;
+    std::printf("%.0f mL: gap %.3g of %.3g m; kinetic relaxation %ld, implicit %ld steps\n",
+                filling * 1e6, gap, pushed, relaxed.iterations, r.iterations);
+  }
+}
+
+// Implicit steps of 100 times the explicit stability limit through the study's dynamic
+// pressure-probe scene: every step converges, and held on after the push, the run settles
+// on the static study's equilibrium.
+TEST(ProstateDynamics, ImplicitStepsAtAHundredTimesTheLimitSettleOnTheEquilibrium) {
+  for (double filling : {kEmpty, kFull}) {
+    SceneSettings s = dynamic_scene(Options{}, filling, Probe::pressure);
+    s.duration = 1.0;
+    Scene scene = parse_scene(scene_text(Options{}, s), "dynamic.yaml");
+    scene.simulation.integrator = Integrator::implicit;
+    scene.simulation.implicit_iterations = 200;
+    scene.simulation.implicit_tolerance = 1e-9;
+    Simulator sim(compile_scene(scene));
+    sim.set_dt(100.0 * sim.stable_dt());
+    int most = 0;
+    while (sim.data().time < 3.0) {
+      sim.step();
+      ASSERT_LT(implicit_residual_force(sim.data()), 1e-9) << sim.data().time;
+      most = std::max(most, implicit_iterations(sim.data()));
+    }
+    Options tight;
+    tight.tolerance = 1e-10;
+    tight.static_solver = StaticSolver::implicit;  // equal to the relaxation's (above)
+    const FillingResult r = run_filling(tight, filling, Probe::pressure);
+    double worst = 0.0, pushed = 0.0;
+    for (size_t i = 0; i < r.after.size(); ++i) {
+      worst = std::max(worst, (sim.data().x[i] - r.after[i]).norm());
+      pushed = std::max(pushed, (r.after[i] - r.before[i]).norm());
+    }
+    EXPECT_LT(worst, 1e-5 * pushed) << filling;  // measured 4e-9 and 4e-7 of it
+    std::printf(
+        "%.0f mL: dt %.3g s (100 times %.3g s), at most %d solves a step; %.3g m "
+        "from the static equilibrium, the push %.3g m\n",
+        filling * 1e6, sim.dt(), sim.stable_dt(), most, worst, pushed);
+  }
 }
 
 }  // namespace

@@ -70,6 +70,9 @@ struct Options {
   // s, dynamic scenes: mass scaling lifts the light nodes' stability limit to this (0: none).
   double mass_scaling_dt = 0.0;
   double tolerance = 1e-6;  // N, static equilibrium: largest residual nodal force
+  // Static equilibria by kinetic relaxation, or by the implicit static solver (which takes
+  // no obstacle yet: the pressure probe, Support::lateral).
+  StaticSolver static_solver = StaticSolver::relaxation;
   // N, the same with the rigid probe, whose contact slows the relaxation's last digits
   // (README "The prostate study"); at K = 640 N/m 0.1 mN moves a node by about 0.16 um.
   double contact_tolerance = 1e-4;
