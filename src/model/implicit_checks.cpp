@@ -1,5 +1,6 @@
 // What `integrator: implicit` cannot take yet (rigid and active objects, finite elements,
-// obstacles, contacts), found in the scene before compiling: one diagnostic each, at the field.
+// obstacles with friction, contact pairs, needles), found in the scene before compiling: one
+// diagnostic each, at the field.
 #include <fmt/format.h>
 
 #include <string>
@@ -24,8 +25,8 @@ std::string implicit_static_at(const SimulationSpec& s) {
 
 constexpr const char* kTakes =
     "it takes elastic shape-memory objects with gravity, 'force' loads, pressures, 'fixed', "
-    "'displacement' and 'spring' constraints, stitches, doubled nodes and volume constraints; use "
-    "'integrator: verlet'";
+    "'displacement' and 'spring' constraints, stitches, doubled nodes, volume constraints and "
+    "frictionless obstacles; use 'integrator: verlet'";
 
 template <class Spec>
 void refuse_all(const std::vector<Spec>& specs, const char* what, const std::string& at,
@@ -55,7 +56,13 @@ void check_implicit_scene(const Scene& scene, std::vector<Diagnostic>& problems)
                                       "implicit'{}: {}",
                                       o.name, at, kTakes)});
   }
-  refuse_all(scene.obstacles, "obstacles", at, problems);
+  for (size_t k = 0; k < scene.obstacles.size(); ++k)
+    if (const ObstacleSpec& o = scene.obstacles[k]; o.friction > 0.0)
+      problems.push_back(
+          {o.loc, fmt::format("obstacle '{}' has friction {:g}, not supported by 'integrator: "
+                              "implicit'{}: {}",
+                              o.name.empty() ? fmt::format("obstacle{}", k) : o.name, o.friction,
+                              at, kTakes)});
   refuse_all(scene.contacts, "contacts", at, problems);
   refuse_all(scene.needles, "needles", at, problems);
 }

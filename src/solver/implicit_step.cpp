@@ -10,7 +10,9 @@
 // global step exactly; here the rotation-derivative forces stay in r, so the fixed point,
 // r = 0, is this model's backward-Euler step and not a nearby model's. Volume constraints
 // enter each solve linearised (a Schur complement on their gradients), then are projected
-// exactly; doubled nodes share one unknown; held axes are eliminated.
+// exactly; doubled nodes share one unknown; held axes are eliminated. Rigid obstacles are
+// projected after each solve like the volumes; on a node touching one, the residual's push
+// into it is the obstacle's reaction, kept out of the solve and of the convergence test.
 #include "solver/implicit_step.hpp"
 
 #include <Eigen/OrderingMethods>
@@ -20,6 +22,7 @@
 #include <stdexcept>
 
 #include "constraints/constraints.hpp"
+#include "constraints/contact.hpp"
 #include "model/workspace.hpp"
 #include "phymul/forces.hpp"
 
@@ -37,11 +40,21 @@ using SmallVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxVolumes, 1>;
 // shape memory) the full correction overshoots.
 constexpr double kShrink = 0.7, kShortestStep = 1.0 / 16.0;
 
+// m: a node this close to an obstacle's surface (or inside it) touches it. The projection puts
+// it on the surface to round-off; the volume projection after it moves it by second-order
+// amounts of the last correction, far below this.
+constexpr double kTouching = 1e-9;
+
+bool with_friction(const Model& model) {
+  return std::any_of(model.obstacles.begin(), model.obstacles.end(),
+                     [](const RigidObstacle& o) { return o.friction > 0.0; });
+}
+
 void refuse_unsupported(const Model& model) {
   const char* what = !model.rigid_bodies.empty()    ? "rigid bodies"
                      : !model.fibres.empty()        ? "active fibres"
                      : !model.explicit_fem.empty()  ? "explicit finite elements"
-                     : !model.obstacles.empty()     ? "rigid obstacles"
+                     : with_friction(model)         ? "obstacles with friction"
                      : !model.contact_pairs.empty() ? "contact pairs"
                      : model.volumes.size() > size_t(kMaxVolumes)
                          ? "more than 16 volume constraints"
@@ -275,9 +288,42 @@ void backward_euler_residual(const Model& model, const Data& d, double h, std::s
   }
 }
 
-// Largest residual nodal force (N) over the unknowns, less what the volume constraints'
-// pressures balance (the least-squares multipliers of their gradients).
-double largest_residual(const Model& model, ImplicitSystem& s) {
+// The nodes touching an obstacle at load_time, into work.contacts (push: the way the shape
+// pushes) and d.obstacle_touching.
+void find_contacts(const Model& model, Data& d, double load_time) {
+  Workspace& w = *d.work;
+  w.contacts.clear();
+  std::fill(d.obstacle_touching.begin(), d.obstacle_touching.end(), -1);
+  for (int k = 0; k < int(model.obstacles.size()); ++k) {
+    const RigidObstacle& o = model.obstacles[size_t(k)];
+    auto add = [&](int i) {
+      const SurfaceDistance sd =
+          obstacle_distance(o, d.controls.obstacle_motion[size_t(k)], d.x[size_t(i)], load_time);
+      if ((o.keep_inside ? -sd.distance : sd.distance) > kTouching) return;
+      w.contacts.push_back({i, o.keep_inside ? Vec3(-sd.normal) : sd.normal, 0.0});
+      d.obstacle_touching[size_t(i)] = k;
+    };
+    if (o.nodes.empty())
+      for (int i = 0; i < model.node_count(); ++i) add(i);
+    else
+      for (int i : o.nodes) add(i);
+  }
+}
+
+// A node's value over its unknowns (0 on held axes).
+Vec3 node_value(const ImplicitSystem& s, const std::array<Eigen::VectorXd, 3>& field, int i) {
+  Vec3 v = Vec3::Zero();
+  for (int a = 0; a < 3; ++a)
+    if (const int u = s.unknown[size_t(a)][size_t(i)]; u >= 0) v[a] = field[size_t(a)][u];
+  return v;
+}
+
+// Takes out of the residual the volume constraints' pressures (the least-squares multipliers
+// of their gradients) and, on touching nodes, the push into the obstacle (its reaction, added
+// up per obstacle into d.contact_force). The normal parts on touching nodes are the contact's
+// to balance: they take no part in the pressures' fit, as in the static residual.
+void remove_reactions(const Model& model, Data& d, ImplicitSystem& s) {
+  const std::vector<ObstacleContact>& contacts = d.work->contacts;
   const int volumes = int(model.volumes.size());
   if (volumes > 0) {
     Small gg(volumes, volumes);
@@ -287,10 +333,34 @@ double largest_residual(const Model& model, ImplicitSystem& s) {
       for (int m = 0; m <= l; ++m)
         gg(l, m) = gg(m, l) = dot(s.gradient[size_t(l)], s.gradient[size_t(m)]);
     }
+    for (const ObstacleContact& c : contacts) {
+      const double rn = node_value(s, s.residual, c.node).dot(c.push);
+      for (int l = 0; l < volumes; ++l) {
+        const double gl = node_value(s, s.gradient[size_t(l)], c.node).dot(c.push);
+        gr[l] -= rn * gl;
+        for (int m = 0; m <= l; ++m)
+          gg(l, m) = gg(m, l) =
+              gg(l, m) - gl * node_value(s, s.gradient[size_t(m)], c.node).dot(c.push);
+      }
+    }
     const SmallVector p = gg.ldlt().solve(gr);
     for (int l = 0; l < volumes; ++l)
       for (int a = 0; a < 3; ++a) s.residual[size_t(a)] -= p[l] * s.gradient[size_t(l)][size_t(a)];
   }
+  std::fill(d.contact_force.begin(), d.contact_force.end(), Vec3::Zero());
+  for (const ObstacleContact& c : contacts) {
+    const double into = node_value(s, s.residual, c.node).dot(c.push);
+    if (into >= 0.0) continue;  // pulled away: the obstacle holds nothing
+    for (int a = 0; a < 3; ++a)
+      if (const int u = s.unknown[size_t(a)][size_t(c.node)]; u >= 0)
+        s.residual[size_t(a)][u] -= into * c.push[a];
+    d.contact_force[size_t(d.obstacle_touching[size_t(c.node)])] -= into * c.push;
+  }
+}
+
+// Largest residual nodal force (N) over the unknowns, the reactions taken out.
+double largest_residual(const Model& model, Data& d, ImplicitSystem& s) {
+  remove_reactions(model, d, s);
   double largest2 = 0.0;
   for (int i = 0; i < model.node_count(); ++i) {
     double r2 = 0.0;
@@ -327,15 +397,16 @@ void global_step(const Model& model, Data& d, ImplicitSystem& s, double load_tim
 
 // The residual and the volumes' gradients at d.x over the unknowns; the largest residual
 // nodal force (N).
-double residual_at(const Model& model, Data& d, ImplicitSystem& s, double h) {
+double residual_at(const Model& model, Data& d, ImplicitSystem& s, double h, double load_time) {
   Workspace& w = *d.work;
+  if (!model.obstacles.empty()) find_contacts(model, d, load_time);
   backward_euler_residual(model, d, h, w.f_start);
   gather(s, w.f_start, s.residual);
   for (size_t l = 0; l < model.volumes.size(); ++l) {
     volume_gradient(model.volumes[l], d.x, w.f_start);
     gather(s, w.f_start, model.volumes[l].nodes, s.gradient[l]);
   }
-  return largest_residual(model, s);
+  return largest_residual(model, d, s);
 }
 
 }  // namespace
@@ -361,7 +432,7 @@ void step_implicit(const Model& model, Data& d, double h, double load_time, int 
   double alpha = 1.0, previous = std::numeric_limits<double>::infinity();
   for (;;) {
     compute_forces(model, d, load_time);  // the local step: each node's rotation
-    s.residual_force = residual_at(model, d, s, h);
+    s.residual_force = residual_at(model, d, s, h, load_time);
     if (s.residual_force <= tolerance || s.iterations >= most) break;
     if (s.residual_force > previous) alpha = std::max(kShrink * alpha, kShortestStep);
     previous = s.residual_force;
