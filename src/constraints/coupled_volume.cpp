@@ -382,7 +382,8 @@ bool project_coupled_volume_velocities(const Model& model, Workspace& w, std::sp
 }
 
 // A node against an obstacle may push along the contact normal with any force: that part of
-// its residual and of the gradients is left out of the least squares.
+// its residual and of the gradients' free parts is left out of the least squares (of the
+// residual's and of the support reactions' alike).
 void remove_contact_normals(const Model& model, const Workspace& w,
                             std::span<const ObstacleContact> contact, std::span<const Vec3> r,
                             Square& a, Column& balanced) {
@@ -393,7 +394,10 @@ void remove_contact_normals(const Model& model, const Workspace& w,
       const VolumeConstraint& c = model.volumes[size_t(k)];
       const auto at = std::lower_bound(c.nodes.begin(), c.nodes.end(), i);
       if (at != c.nodes.end() && *at == i)
-        along[size_t(k)] = w.volumes[size_t(k)].direction[size_t(at - c.nodes.begin())].dot(normal);
+        along[size_t(k)] = w.volumes[size_t(k)]
+                               .direction[size_t(at - c.nodes.begin())]
+                               .cwiseProduct(free_axes(model.inverse_mass[size_t(i)]))
+                               .dot(normal);
     }
     const double r_along = r[size_t(i)].dot(normal);
     for (int k = 0; k < n; ++k) {
@@ -443,7 +447,7 @@ bool remove_coupled_volume_pressures(const Model& model, Workspace& w, std::span
       a[size_t(k * kMax + l)] = a[size_t(l * kMax + k)] = kSixth * product;
     }
   }
-  if (on_free_axes) remove_contact_normals(model, w, contact, r, a, balanced);
+  remove_contact_normals(model, w, contact, r, a, balanced);
   if (!cholesky(n, a)) return false;
   solve(n, a, balanced);
   move_along_directions(model, w, balanced, r);

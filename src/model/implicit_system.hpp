@@ -35,6 +35,24 @@ struct ImplicitSystem {
   std::vector<double> block;
   // Per volume constraint and axis: its gradient over the unknowns and P^-1 times it.
   std::vector<std::array<Eigen::VectorXd, 3>> gradient, solved_gradient;
+  // Frictionless obstacles (solver/implicit_contacts.cpp): the nodes an obstacle pushes this
+  // iteration and the way it pushes, each a constraint push . dx = 0 of the global solve.
+  struct Contact {
+    int node = 0;
+    Eigen::Vector3d push = Eigen::Vector3d::Zero();
+    double gap = 0.0;  // m, along push: how far the node is clear of the surface
+  };
+  std::vector<Contact> active;
+  std::vector<double> touching_gap;  // per Workspace::contacts entry: its gap
+  // Columns of P^-1 at those nodes' unknowns, kept while the factor is: per axis owning a
+  // factor (owner: the first axis sharing it), each unknown's slot (-1: none) and the slots.
+  std::array<int, 3> owner{0, 1, 2};
+  std::array<std::vector<int>, 3> column_slot;
+  std::array<std::vector<double>, 3> columns;
+  std::array<int, 3> columns_used{0, 0, 0};
+  int column_capacity = 0;
+  // The Schur complement of volumes and contacts, row-major, and its right-hand side.
+  std::vector<double> schur, rhs;
   // The last step: global solves taken, and the largest residual nodal force (N) at its end.
   int iterations = 0;
   double residual_force = 0.0;

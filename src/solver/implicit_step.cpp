@@ -25,6 +25,8 @@
 #include "constraints/contact.hpp"
 #include "model/workspace.hpp"
 #include "phymul/forces.hpp"
+#include "solver/implicit_contacts.hpp"
+#include "solver/implicit_solve.hpp"
 
 namespace phymul {
 namespace {
@@ -167,42 +169,8 @@ void prepare(const Model& model, ImplicitSystem& s, double h) {
   size_t most = 0;
   for (int a = 0; a < 3; ++a) most = std::max(most, size_t(s.unknowns[size_t(a)]));
   s.block.assign(most * 3 * (1 + model.volumes.size()), 0.0);
+  prepare_implicit_contacts(model, s);
   s.h = h;
-}
-
-// X = P^-1 X for k right-hand sides at once, X row-major in the permuted order (row p's k
-// values at x + p k): one pass over the factor for all of them, the k values of a row
-// contiguous (an axis's residual and each volume's gradient, for each axis sharing the
-// factor), where k separate solves would read the factor k times.
-// K: the count at compile time (unrolled), or 0 for any count k.
-template <int K>
-void solve_block(const ImplicitFactor& f, double* __restrict x, int count) {
-  const int k = K > 0 ? K : count;
-  const Eigen::SparseMatrix<double>& L = f.llt.matrixL().nestedExpression();
-  const int n = int(L.cols());
-  const int* __restrict start = L.outerIndexPtr();
-  const int* __restrict row = L.innerIndexPtr();
-  const double* __restrict value = L.valuePtr();
-  for (int j = 0; j < n; ++j) {  // L Y = X; each column's diagonal comes first
-    double* __restrict xj = x + size_t(j) * size_t(k);
-    const double inverse = 1.0 / value[start[j]];
-    for (int c = 0; c < k; ++c) xj[c] *= inverse;
-    for (int e = start[j] + 1; e < start[j + 1]; ++e) {
-      double* __restrict xi = x + size_t(row[e]) * size_t(k);
-      const double l = value[e];
-      for (int c = 0; c < k; ++c) xi[c] -= l * xj[c];
-    }
-  }
-  for (int j = n - 1; j >= 0; --j) {  // L^T X = Y
-    double* __restrict xj = x + size_t(j) * size_t(k);
-    for (int e = start[j] + 1; e < start[j + 1]; ++e) {
-      const double* __restrict xi = x + size_t(row[e]) * size_t(k);
-      const double l = value[e];
-      for (int c = 0; c < k; ++c) xj[c] -= l * xi[c];
-    }
-    const double inverse = 1.0 / value[start[j]];
-    for (int c = 0; c < k; ++c) xj[c] *= inverse;
-  }
 }
 
 // P^-1 applied to every axis's residual (into correction) and every volume's gradient (into
@@ -293,14 +261,17 @@ void backward_euler_residual(const Model& model, const Data& d, double h, std::s
 void find_contacts(const Model& model, Data& d, double load_time) {
   Workspace& w = *d.work;
   w.contacts.clear();
+  w.implicit.touching_gap.clear();
   std::fill(d.obstacle_touching.begin(), d.obstacle_touching.end(), -1);
   for (int k = 0; k < int(model.obstacles.size()); ++k) {
     const RigidObstacle& o = model.obstacles[size_t(k)];
     auto add = [&](int i) {
       const SurfaceDistance sd =
           obstacle_distance(o, d.controls.obstacle_motion[size_t(k)], d.x[size_t(i)], load_time);
-      if ((o.keep_inside ? -sd.distance : sd.distance) > kTouching) return;
+      const double gap = o.keep_inside ? -sd.distance : sd.distance;
+      if (gap > kTouching) return;
       w.contacts.push_back({i, o.keep_inside ? Vec3(-sd.normal) : sd.normal, 0.0});
+      w.implicit.touching_gap.push_back(gap);
       d.obstacle_touching[size_t(i)] = k;
     };
     if (o.nodes.empty())
@@ -348,9 +319,12 @@ void remove_reactions(const Model& model, Data& d, ImplicitSystem& s) {
       for (int a = 0; a < 3; ++a) s.residual[size_t(a)] -= p[l] * s.gradient[size_t(l)][size_t(a)];
   }
   std::fill(d.contact_force.begin(), d.contact_force.end(), Vec3::Zero());
-  for (const ObstacleContact& c : contacts) {
+  s.active.clear();
+  for (size_t k = 0; k < contacts.size(); ++k) {
+    const ObstacleContact& c = contacts[k];
     const double into = node_value(s, s.residual, c.node).dot(c.push);
     if (into >= 0.0) continue;  // pulled away: the obstacle holds nothing
+    s.active.push_back({c.node, c.push, s.touching_gap[k]});
     for (int a = 0; a < 3; ++a)
       if (const int u = s.unknown[size_t(a)][size_t(c.node)]; u >= 0)
         s.residual[size_t(a)][u] -= into * c.push[a];
@@ -372,13 +346,13 @@ double largest_residual(const Model& model, Data& d, ImplicitSystem& s) {
   return std::sqrt(largest2);
 }
 
-// The correction P^-1 (r - G^T mu), mu such that each volume reaches its target to first
-// order (G the volumes' gradients over the unknowns).
+// The correction P^-1 (r - G^T mu), mu such that each volume reaches its target and each
+// node an obstacle pushes stays on its surface, to first order (G: the volumes' gradients and
+// the contacts' pushes over the unknowns).
 void global_step(const Model& model, Data& d, ImplicitSystem& s, double load_time) {
   solve_all(model, s);
   const int volumes = int(model.volumes.size());
-  if (volumes == 0) return;
-  Small schur(volumes, volumes);
+  if (volumes == 0 && s.active.empty()) return;
   SmallVector rate(volumes);
   for (int l = 0; l < volumes; ++l) {
     const VolumeConstraint& c = model.volumes[size_t(l)];
@@ -386,6 +360,11 @@ void global_step(const Model& model, Data& d, ImplicitSystem& s, double load_tim
         target_volume(model, d.controls, size_t(l), load_time) - enclosed_volume(d.x, c.triangles);
     rate[l] = dot(s.gradient[size_t(l)], s.correction) - gap;
   }
+  if (!s.active.empty()) {
+    constrain_to_contacts(model, s, {rate.data(), size_t(volumes)});
+    return;
+  }
+  Small schur(volumes, volumes);
   for (int l = 0; l < volumes; ++l)
     for (int m = 0; m <= l; ++m)
       schur(l, m) = schur(m, l) = dot(s.gradient[size_t(l)], s.solved_gradient[size_t(m)]);

@@ -250,10 +250,15 @@ std::vector<Vec3> support_reactions(const Model& model, const Data& d) {
   // Each volume constraint carries a pressure: the least-squares multiplier of its gradient
   // against the forces on the free axes (what max_residual_force takes out). Its scratch is
   // a copy of the workspace, so that the data stays as it is.
+  // The contact normals are left to the contacts, as there: an obstacle's push would
+  // otherwise bias the pressures, and with them every held node's reaction.
   Workspace work = *d.work;
+  work.contacts.clear();
+  for (int k = 0; k < int(model.obstacles.size()); ++k)
+    add_touching_nodes(model, d, k, d.time, work.contacts);
   std::vector<Vec3> reaction(d.f);
   std::vector<Vec3> grad(d.x.size(), Vec3::Zero());
-  remove_volume_pressures(model, work, d.x, reaction, grad, /*on_free_axes=*/false);
+  remove_volume_pressures(model, work, d.x, reaction, grad, /*on_free_axes=*/false, work.contacts);
   for (int i = 0; i < model.node_count(); ++i) {
     const Vec3 held = Vec3::Ones() - free_axes(model.inverse_mass[i]);
     reaction[i] = -reaction[i].cwiseProduct(held);

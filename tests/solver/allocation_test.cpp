@@ -148,6 +148,22 @@ TEST(Simulator, OrganExampleStepsDoNotAllocate) {
   }
 }
 
+// Implicit steps against an obstacle: the contacts' columns of P^-1 and their Schur
+// complement live in storage sized when the matrix is factorised.
+TEST(Simulator, ImplicitStepsAgainstAnObstacleDoNotAllocate) {
+  if (!PHYMUL_COUNT_ALLOCATIONS) GTEST_SKIP() << "allocations are counted in the normal build only";
+  Scene scene = load_scene(testing::source_dir() / "examples" / "bladder_filling.yaml");
+  scene.simulation.integrator = Integrator::implicit;
+  scene.obstacles.at(0).position.z() = -0.029;  // the floor under the bladder's bottom at once
+  scene.objects.at(0).mesh.subdivisions = 2;     // 162 nodes
+  Simulator sim(compile_scene(scene));
+  sim.set_dt(10.0 * sim.dt());
+  while (sim.data().contact_force.at(0).norm() == 0.0) sim.step();  // on the floor
+  const auto [count, residual] = allocations_in_steps(sim);
+  EXPECT_EQ(count, 0);
+  EXPECT_GT(sim.data().contact_force[0].z(), 0.0);
+}
+
 // Surfaces sharing nodes (a prostate stitched to a bladder): the joint volume projection,
 // velocity projection and residual's pressures work in preallocated storage.
 TEST(Simulator, CoupledVolumeStepsDoNotAllocate) {

@@ -1,0 +1,26 @@
+// Frictionless obstacles in the implicit step's global solve: each node an obstacle pushes is
+// put on its surface to first order (push . dx = -gap) by the same Schur complement that keeps
+// the volumes, so the iteration's fixed point is the equilibrium with the contact reactions.
+// (Projecting after an unconstrained solve instead has fixed points off equilibrium: P couples
+// a held node to its neighbours.)
+#pragma once
+
+#include <span>
+
+#include "model/implicit_system.hpp"
+#include "phymul/model.hpp"
+
+namespace phymul {
+
+// Sizes the column cache and the Schur complement's storage for the model's obstacles, after
+// the factors are made (allocates; nothing without obstacles).
+void prepare_implicit_contacts(const Model& model, ImplicitSystem& s);
+
+// The correction P^-1 (r - G^T mu) with G the volumes' gradients and the active contacts'
+// pushes: s.correction and s.solved_gradient hold P^-1 r and P^-1 g on entry. volume_rate:
+// g . P^-1 r minus each volume's gap to its target. Throws std::runtime_error when more
+// nodes touch than the column cache holds.
+void constrain_to_contacts(const Model& model, ImplicitSystem& s,
+                           std::span<const double> volume_rate);
+
+}  // namespace phymul
