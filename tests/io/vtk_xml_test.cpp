@@ -360,6 +360,32 @@ TEST(VtkXml, DamagedFilesNameTheElementAndWhatIsWrong) {
         "at most 42 are left");
 }
 
+void expect_same(const Mesh& got, const Mesh& want) {
+  ASSERT_EQ(got.points.size(), want.points.size());
+  for (size_t i = 0; i < want.points.size(); ++i) EXPECT_EQ(got.points[i], want.points[i]) << i;
+  ASSERT_EQ(got.cells.size(), want.cells.size());
+  for (size_t c = 0; c < want.cells.size(); ++c) {
+    EXPECT_EQ(got.cells[c].type, want.cells[c].type);
+    EXPECT_EQ(got.cells[c].nodes, want.cells[c].nodes) << c;
+  }
+}
+
+// tests/data/vtkxml: what VTK and meshio wrote from a legacy .vtk grid and an OBJ surface.
+TEST(VtkXml, FilesVtkAndMeshioWroteAreTheirOriginals) {
+  const auto dir = testing::source_dir() / "tests/data/vtkxml";
+  const Mesh block = read_mesh_file(testing::source_dir() / "examples/meshes/block.vtk");
+  for (const char* name : {"block_zlib.vtu", "block_appended_base64.vtu"}) {
+    SCOPED_TRACE(name);
+    expect_same(read_mesh_file(dir / name), block);
+  }
+  const Mesh octahedron =
+      read_mesh_file(testing::source_dir() / "tests/data/surfaces/octahedron.obj");
+  for (const char* name : {"octahedron_appended_zlib.vtp", "octahedron_binary.vtp"}) {
+    SCOPED_TRACE(name);
+    expect_same(read_mesh_file(dir / name), octahedron);
+  }
+}
+
 // Cut anywhere, a binary file is refused with a MeshFileError or reads whole.
 TEST(VtkXml, EveryPrefixIsRefusedCleanlyOrReadsWhole) {
   for (const std::string& file :
