@@ -53,8 +53,8 @@ int mesh(const Settings& s) {
 Command add_mesh_command(CLI::App& parent) {
   auto settings = std::make_shared<Settings>();
   CLI::App* app = parent.add_subcommand(
-      "mesh", "fill a closed surface (STL, OBJ, PLY) with tetrahedra, written as .vtu");
-  app->add_option("surface", settings->surface, "closed surface file (.stl, .obj, .ply)")
+      "mesh", "fill a closed surface (STL, OBJ, PLY, VTP) with tetrahedra, written as .vtu");
+  app->add_option("surface", settings->surface, "closed surface file (.stl, .obj, .ply, .vtp)")
       ->required()
       ->check(CLI::ExistingFile);
   app->add_option("-o,--output", settings->output, "volume mesh to write (.vtu)")->required();

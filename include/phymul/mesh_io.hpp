@@ -1,7 +1,8 @@
 // Meshes read from files: legacy VTK ASCII unstructured grids (.vtk, versions up to 5.1),
-// Gmsh ASCII (.msh, versions 4.1 and 2.2) and closed surfaces (.stl, .obj, .ply). Every
-// problem names the file, its line and column where it has lines, what was expected and what
-// was found.
+// VTK XML unstructured grids (.vtu), Gmsh ASCII (.msh, versions 4.1 and 2.2) and closed
+// surfaces (.stl, .obj, .ply, VTK XML PolyData .vtp). Every problem names the file, its line
+// and column where it has lines (for VTK XML: the element's), what was expected and what was
+// found.
 #pragma once
 
 #include <filesystem>
@@ -33,10 +34,11 @@ class MeshFileError : public std::runtime_error {
 //
 // Closed surfaces (an organ's boundary, as segmentation tools write them): STL (ASCII or
 // binary), OBJ (polygons split into triangles from their first vertex), PLY (ASCII or binary,
-// either byte order). Points with the same coordinates are merged; the surface must be
-// closed, manifold, orientable, free of degenerate and crossing triangles (a MeshFileError
-// names the edges or triangles otherwise); its orientation is made consistent and outward.
-// What was repaired is appended to `notes`.
+// either byte order), VTP (its Polys, split likewise; vertices, lines and strips are refused).
+// Points with the same coordinates are merged; the surface must be closed, manifold, orientable,
+// free of degenerate and crossing triangles (a MeshFileError names the edges or triangles
+// otherwise); its orientation is made consistent and outward. What was repaired is appended to
+// `notes`.
 Mesh read_mesh_file(const std::filesystem::path& path, double divisor = 1.0,
                     std::vector<std::string>* notes = nullptr);
 
@@ -48,6 +50,11 @@ Mesh parse_stl_mesh(std::string_view bytes, const std::string& name, double divi
 Mesh parse_obj_mesh(std::string_view text, const std::string& name, double divisor = 1.0,
                     std::vector<std::string>* notes = nullptr);
 Mesh parse_ply_mesh(std::string_view bytes, const std::string& name, double divisor = 1.0,
+                    std::vector<std::string>* notes = nullptr);
+// VTK XML (one Piece; ASCII, base64 or appended arrays, plain or zlib-compressed): an
+// unstructured grid as a legacy VTK file, and a PolyData surface's polygons as a closed surface.
+Mesh parse_vtu_mesh(std::string_view bytes, const std::string& name, double divisor = 1.0);
+Mesh parse_vtp_mesh(std::string_view bytes, const std::string& name, double divisor = 1.0,
                     std::vector<std::string>* notes = nullptr);
 
 }  // namespace phymul

@@ -142,7 +142,8 @@ py::dict read_mesh(const std::string& path, double divisor) {
 
 void bind_run(py::module_& m) {
   m.def("read_mesh", &read_mesh, py::arg("path"), py::arg("divisor") = 1.0,
-        "A mesh file (.vtk, .msh, .stl, .obj, .ply) as {points, cells: {type: nodes}, notes}; "
+        "A mesh file (.vtk, .vtu, .msh, .stl, .obj, .ply, .vtp) as {points, cells: {type: nodes}, "
+        "notes}; "
         "coordinates divided by `divisor` (1000 for millimetres).");
   m.def("_run", &run, py::arg("scene"), py::arg("out"), py::arg("progress") = false,
         py::arg("checkpoint_every") = "", py::arg("resume") = false);

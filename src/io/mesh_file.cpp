@@ -116,6 +116,23 @@ void Lexer::fail_here(const std::string& message) const {
   throw MeshFileError(name_, line_, int(at_ - line_start_) + 1, message);
 }
 
+std::optional<CellType> cell_type_of_vtk(long long code) {
+  switch (code) {
+    case 5:
+      return CellType::triangle;
+    case 9:
+      return CellType::quad;
+    case 10:
+      return CellType::tetra;
+    case 12:
+      return CellType::hexa;
+    case 13:
+      return CellType::wedge;
+    default:
+      return std::nullopt;
+  }
+}
+
 void check_text(std::string_view text, const std::string& name) {
   int line = 1;
   size_t line_start = 0;
@@ -177,10 +194,13 @@ Mesh read_mesh_file(const std::filesystem::path& path, double divisor,
   if (ext == ".stl") return parse_stl_mesh(text, path.string(), divisor, notes);
   if (ext == ".obj") return parse_obj_mesh(text, path.string(), divisor, notes);
   if (ext == ".ply") return parse_ply_mesh(text, path.string(), divisor, notes);
+  if (ext == ".vtu") return parse_vtu_mesh(text, path.string(), divisor);
+  if (ext == ".vtp") return parse_vtp_mesh(text, path.string(), divisor, notes);
   throw MeshFileError(path.string(), 0, 0,
                       fmt::format("unknown mesh file type '{}': expected .vtk (legacy VTK ASCII), "
-                                  ".msh (Gmsh ASCII 4.1 or 2.2), or a closed surface: .stl "
-                                  "(ASCII or binary), .obj, .ply (ASCII or binary)",
+                                  ".vtu (VTK XML unstructured grid), .msh (Gmsh ASCII 4.1 or "
+                                  "2.2), or a closed surface: .stl (ASCII or binary), .obj, .ply "
+                                  "(ASCII or binary), .vtp (VTK XML PolyData)",
                                   ext));
 }
 

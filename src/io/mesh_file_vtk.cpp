@@ -16,26 +16,6 @@ using mesh_io::Token;
 
 constexpr long long kMaxCount = INT_MAX / 8;
 
-std::optional<CellType> vtk_type(long long code) {
-  switch (code) {
-    case 5:
-      return CellType::triangle;
-    case 9:
-      return CellType::quad;
-    case 10:
-      return CellType::tetra;
-    case 12:
-      return CellType::hexa;
-    case 13:
-      return CellType::wedge;
-    default:
-      return std::nullopt;
-  }
-}
-
-constexpr const char* kSupported =
-    "5 (triangle), 9 (quad), 10 (tetra), 12 (hexahedron) or 13 (wedge)";
-
 struct RawCell {
   std::vector<long long> nodes;
   Token at;
@@ -123,10 +103,10 @@ void read_cell_types(Lexer& in, const std::vector<RawCell>& raw, Mesh& mesh) {
   mesh.cells.resize(raw.size());
   for (size_t c = 0; c < raw.size(); ++c) {
     const long long code = in.integer(fmt::format("the type of cell {}", c), LLONG_MIN, LLONG_MAX);
-    const auto type = vtk_type(code);
+    const auto type = mesh_io::cell_type_of_vtk(code);
     if (!type)
       in.fail(in.last(), fmt::format("cell {} has VTK type {}, not supported: expected {}", c, code,
-                                     kSupported));
+                                     mesh_io::kVtkCellTypes));
     const RawCell& r = raw[c];
     if ((long long)r.nodes.size() != node_count(*type))
       in.fail(r.at, fmt::format("cell {} is a {} (type {}) and needs {} nodes, it lists {}", c,

@@ -2,6 +2,7 @@
 // and the checks both formats share.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -49,6 +50,12 @@ class Lexer {
   size_t line_start_ = 0;
   Token last_{};
 };
+
+// VTK's cell type codes that the readers take (legacy VTK and VTK XML), and the list for
+// messages.
+std::optional<CellType> cell_type_of_vtk(long long code);
+constexpr const char* kVtkCellTypes =
+    "5 (triangle), 9 (quad), 10 (tetra), 12 (hexahedron) or 13 (wedge)";
 
 // Refuses NUL and other control bytes (binary files, garbage) at their line and column.
 void check_text(std::string_view text, const std::string& name);

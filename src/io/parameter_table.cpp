@@ -377,11 +377,13 @@ std::vector<Parameter> mesh_parameters() {
        .kind = Kind::path,
        .one_of = "source",
        .doc = "A mesh file, relative to the scene file: legacy VTK ASCII unstructured grid "
-              "(`.vtk`; triangle, quad, tetra, hexahedron, wedge cells) or Gmsh ASCII 4.1 or "
-              "2.2 (`.msh`; the highest-dimension elements are the cells, physical groups become "
-              "node sets). All volume or all surface cells. Or a closed surface: STL (ASCII or "
-              "binary), OBJ or PLY (ASCII or binary), checked closed, manifold and free of "
-              "crossing triangles, its orientation made outward."},
+              "(`.vtk`; triangle, quad, tetra, hexahedron, wedge cells), VTK XML unstructured "
+              "grid (`.vtu`: ASCII, base64 or appended arrays, plain or zlib-compressed, the same "
+              "cells) or Gmsh ASCII 4.1 or 2.2 (`.msh`; the highest-dimension elements are the "
+              "cells, physical groups become node sets). All volume or all surface cells. Or a "
+              "closed surface: STL (ASCII or binary), OBJ, PLY (ASCII or binary) or VTK XML "
+              "PolyData (`.vtp`, its polygons), checked closed, manifold and free of crossing "
+              "triangles, its orientation made outward."},
       {.section = "mesh",
        .name = "units",
        .kind = Kind::choice,

@@ -3,6 +3,7 @@
 // sized once (reserve), so rebuilding it each step allocates nothing.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -25,7 +26,14 @@ class TriangleHash {
   // sharing their buckets: callers test distances anyway).
   template <class Visit>
   void around(const Vec3& p, Visit visit) {
-    const Cell c = cell_of(p);
+    around(cell_of(p), visit);
+  }
+
+  // The same around a cell: points in one cell share their neighbours (callers reuse them).
+  using Cell = std::array<int64_t, 3>;
+  Cell cell_of(const Vec3& p) const;
+  template <class Visit>
+  void around(const Cell& c, Visit visit) {
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz) {
@@ -36,11 +44,24 @@ class TriangleHash {
     ++stamp_;
   }
 
+  // The filed triangles in bucket order (in triangle order within a bucket), and visit(first,
+  // last) for the runs of that order filed around a cell: data kept in the same order is read
+  // in runs, not scattered.
+  std::span<const int> entries() const { return entries_; }
+  template <class Visit>
+  void runs_around(const Cell& c, Visit visit) {
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const uint32_t b = bucket({c[0] + dx, c[1] + dy, c[2] + dz});
+          if (!visited_stamp(b) && start_[b] < start_[b + 1]) visit(start_[b], start_[b + 1]);
+        }
+    ++stamp_;
+  }
+
   double cell_size() const { return cell_; }
 
  private:
-  using Cell = std::array<int64_t, 3>;
-  Cell cell_of(const Vec3& p) const;
   uint32_t bucket(const Cell& c) const;
   bool visited_stamp(uint32_t b);
 
