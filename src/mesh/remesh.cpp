@@ -39,21 +39,25 @@ double area_of(const Mesh& m) {
   return area;
 }
 
+// The edge range for a surface of this area, from the triangle counts allowed.
+std::string edge_range(double area) {
+  const double per = std::sqrt(3.0) / 4.0;  // area of an equilateral triangle of edge 1
+  return fmt::format("the edge must be in [{:.3g}, {:.3g}] mm ({:g} to {:g} triangles)",
+                     std::sqrt(area / (per * kMaxTriangles)) * 1e3,
+                     std::sqrt(area / (per * kMinTriangles)) * 1e3, kMinTriangles, kMaxTriangles);
+}
+
 // The triangle count an edge gives, from the area of equilateral triangles of that edge.
 void check_edge(const Mesh& m, double edge) {
   if (!(edge > 0.0) || !std::isfinite(edge))
     throw MeshError(fmt::format("the remeshing edge must be > 0 m (got {})", edge));
-  const double area = area_of(m), per = std::sqrt(3.0) / 4.0;
-  const double count = area / (per * edge * edge);
-  const double longest = std::sqrt(area / (per * kMinTriangles));
-  const double shortest = std::sqrt(area / (per * kMaxTriangles));
+  const double area = area_of(m);
+  const double count = area / (std::sqrt(3.0) / 4.0 * edge * edge);
   if (count < kMinTriangles || count > kMaxTriangles)
-    throw MeshError(fmt::format(
-        "the remeshing edge {:g} mm does not fit this surface (area {:g} mm^2): it would take "
-        "about {:.0f} triangles; the edge must be in [{:.3g}, {:.3g}] mm ({:g} to {:g} "
-        "triangles)",
-        edge * 1e3, area * 1e6, count, shortest * 1e3, longest * 1e3, kMinTriangles,
-        kMaxTriangles));
+    throw MeshError(
+        fmt::format("the remeshing edge {:g} mm does not fit this surface (area {:.3g} "
+                    "mm^2): it would take about {:.0f} triangles; {}",
+                    edge * 1e3, area * 1e6, count, edge_range(area)));
 }
 
 Mesh to_mesh(const remesh::Work& w) {
@@ -117,6 +121,10 @@ Remeshed remesh_surface(const Mesh& closed_surface, double edge) {
     throw MeshError(fmt::format("remeshing to {:g} mm did not give a closed surface: {}",
                                 edge * 1e3, fmt::join(result.problems, "; ")));
   out.quality = surface_quality(out.surface);
+  if (double(out.quality.triangles) < kMinTriangles)  // the shape is too thin for the edge
+    throw MeshError(fmt::format(
+        "the remeshing edge {:g} mm is too long for this surface: it left {} triangles; {}",
+        edge * 1e3, out.quality.triangles, edge_range(area_of(input))));
   const NearestTriangle back(out.surface.points, triangles_of(out.surface));
   out.deviation = std::max(one_way(out.surface, target), one_way(input, back));
   out.volume_before = enclosed_volume(input);
