@@ -39,11 +39,11 @@ struct Remeshed {
   double volume_before = 0.0, volume_after = 0.0;  // m^3, enclosed
 };
 
-// Isotropic remeshing of a closed, outward triangle surface (as check_closed_surface leaves it)
-// to edges of about `edge` (m): split, collapse, flip, relax, project back onto the input
-// (Botsch and Kobbelt 2004). Throws MeshError naming the allowed edge range when `edge` is too
-// long for the surface (fewer than 20 triangles) or too short, and when the input is not a
-// closed surface or the result is not one.
+// Isotropic remeshing of a closed, outward triangle surface (as check_closed_surface leaves it;
+// crossing triangles are not looked for again) to edges of about `edge` (m): split, collapse,
+// flip, relax, project back onto the input (Botsch and Kobbelt 2004). Throws MeshError naming
+// the allowed edge range when `edge` is too long for the surface (fewer than 20 triangles) or
+// too short, and when the input is not closed, manifold and outward or the result is not.
 Remeshed remesh_surface(const Mesh& closed_surface, double edge);
 
 }  // namespace phymul

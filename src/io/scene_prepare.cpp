@@ -40,9 +40,19 @@ Mesh fill(Mesh surface, double edge, const std::string& file, ObjectSpec& o) {
 
 // `remesh`: the closed surface read from the file remeshed to the edge; its quality, deviation
 // and volume change go to the file's notes.
-Mesh remeshed(const Mesh& surface, double edge, const std::string& file, ObjectSpec& o) {
+Mesh remeshed(Mesh surface, double edge, const std::string& file, ObjectSpec& o) {
   if (surface.volumetric())
     throw MeshFileError(file, 0, 0, "'remesh' needs a closed surface; this is a volume mesh");
+  for (const Cell& c : surface.cells)
+    if (c.type != CellType::triangle)
+      throw MeshFileError(
+          file, 0, 0,
+          fmt::format("'remesh' takes a triangle surface (got a {} cell)", cell_type_name(c.type)));
+  SurfaceCheck check = check_closed_surface(surface);  // a .vtk or .msh surface is not checked
+  if (!check.problems.empty())
+    throw MeshFileError(
+        file, 0, 0,
+        fmt::format("'remesh' needs a closed surface: {}", fmt::join(check.problems, "; ")));
   try {
     const Remeshed r = remesh_surface(surface, edge);
     const SurfaceQuality& q = r.quality;

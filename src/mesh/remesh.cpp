@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <unordered_map>
 
 #include "mesh/nearest_triangle.hpp"
 #include "mesh/remesh_ops.hpp"
@@ -37,6 +39,33 @@ double area_of(const Mesh& m) {
   double area = 0.0;
   for (const Cell& c : m.cells) area += cell_measure(m.points, c);
   return area;
+}
+
+// Every edge run once each way: closed, manifold and consistently oriented, which the local
+// operations need. (Crossing triangles and inside-out surfaces are check_closed_surface's
+// to find, as the readers do; done again here it would cost more than the remeshing.)
+void check_closed_and_oriented(const std::vector<Triangle>& t, size_t points) {
+  std::unordered_map<std::uint64_t, int> runs;  // directed edge a -> b: how many triangles
+  runs.reserve(3 * t.size());
+  for (const Triangle& c : t)
+    for (size_t k = 0; k < 3; ++k) {
+      const int a = c[k], b = c[(k + 1) % 3];
+      if (a < 0 || b < 0 || size_t(a) >= points || size_t(b) >= points || a == b)
+        throw MeshError(
+            fmt::format("remeshing needs a closed surface: a triangle has corners "
+                        "{} and {} of {} points",
+                        a, b, points));
+      ++runs[std::uint64_t(a) << 32 | std::uint32_t(b)];
+    }
+  for (const auto& [edge, count] : runs) {
+    const int a = int(edge >> 32), b = int(edge & 0xffffffffu);
+    const auto back = runs.find(std::uint64_t(b) << 32 | std::uint32_t(a));
+    if (count != 1 || back == runs.end() || back->second != 1)
+      throw MeshError(fmt::format(
+          "remeshing needs a closed, manifold, consistently oriented surface (check_closed_surface "
+          "repairs the orientation): edge {}-{} is run by {} triangle(s) one way and {} the other",
+          a, b, count, back == runs.end() ? 0 : back->second));
+  }
 }
 
 // The edge range for a surface of this area, from the triangle counts allowed.
@@ -96,14 +125,14 @@ double one_way(const Mesh& a, const NearestTriangle& b) {
 }  // namespace
 
 Remeshed remesh_surface(const Mesh& closed_surface, double edge) {
-  Mesh input = closed_surface;
-  std::vector<Triangle> input_triangles = triangles_of(input);
+  const Mesh& input = closed_surface;
+  const std::vector<Triangle> input_triangles = triangles_of(input);
   if (input.cells.empty()) throw MeshError("remeshing needs a surface; this one has no triangle");
-  const SurfaceCheck check = check_closed_surface(input);
-  if (!check.problems.empty())
+  check_closed_and_oriented(input_triangles, input.points.size());
+  if (!(enclosed_volume(input) > 0.0))
     throw MeshError(
-        fmt::format("remeshing needs a closed surface: {}", fmt::join(check.problems, "; ")));
-  input_triangles = triangles_of(input);  // orientation repaired
+        "remeshing needs an outward surface; this one is inside out or flat "
+        "(check_closed_surface turns it outward)");
   check_edge(input, edge);
   const NearestTriangle target(input.points, input_triangles);
   remesh::Work w{input.points, input_triangles};
@@ -111,6 +140,7 @@ Remeshed remesh_surface(const Mesh& closed_surface, double edge) {
     remesh::split_long(w, 4.0 / 3.0 * edge);
     remesh::collapse_short(w, 4.0 / 5.0 * edge, 4.0 / 3.0 * edge);
     remesh::flip_to_valence(w);
+    remesh::compact(w);
     remesh::relax(w);
     for (Vec3& p : w.x) p = target.nearest(p).point;
   }

@@ -220,6 +220,25 @@ void flip_to_valence(Work& w) {
   }
 }
 
+void compact(Work& w) {
+  std::vector<int> index(w.x.size(), -1);
+  Work out;
+  for (const Triangle& t : w.t) {
+    if (dead(t)) continue;
+    Triangle n{};
+    for (size_t k = 0; k < 3; ++k) {
+      int& i = index[size_t(t[k])];
+      if (i < 0) {
+        i = int(out.x.size());
+        out.x.push_back(w.x[size_t(t[k])]);
+      }
+      n[k] = i;
+    }
+    out.t.push_back(n);
+  }
+  w = std::move(out);
+}
+
 void relax(Work& w) {
   std::vector<Vec3> centre(w.x.size(), Vec3::Zero()), n(w.x.size(), Vec3::Zero());
   std::vector<double> weight(w.x.size(), 0.0);

@@ -21,6 +21,9 @@ void split_long(Work& w, double high);
 void collapse_short(Work& w, double low, double high);
 // Flips edges where that brings the four vertices' valences closer to 6.
 void flip_to_valence(Work& w);
+// Drops dead triangles and the vertices no triangle uses (a fine input's collapsed points
+// would otherwise be relaxed and projected every round).
+void compact(Work& w);
 // Moves each vertex in its tangent plane towards the area-weighted centre of its triangles.
 void relax(Work& w);
 

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <numbers>
 #include <set>
 #include <string>
 
@@ -63,8 +64,8 @@ TEST(UnitsTest, ConvertsEveryDimension) {
   EXPECT_DOUBLE_EQ(si("-1 g0", Dimension::acceleration), -9.80665);
   EXPECT_DOUBLE_EQ(si("-9.81 m/s^2", Dimension::acceleration), -9.81);
   EXPECT_DOUBLE_EQ(si("5 1/s", Dimension::rate), 5.0);
-  EXPECT_DOUBLE_EQ(si("90 deg", Dimension::angle), M_PI / 2);
-  EXPECT_DOUBLE_EQ(si("-180deg", Dimension::angle), -M_PI);
+  EXPECT_DOUBLE_EQ(si("90 deg", Dimension::angle), std::numbers::pi / 2);
+  EXPECT_DOUBLE_EQ(si("-180deg", Dimension::angle), -std::numbers::pi);
   EXPECT_DOUBLE_EQ(si("0.5 rad", Dimension::angle), 0.5);
   EXPECT_DOUBLE_EQ(si("5 Hz", Dimension::rate), 5.0);
   EXPECT_DOUBLE_EQ(si("2 L", Dimension::volume), 2e-3);

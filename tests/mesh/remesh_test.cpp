@@ -151,6 +151,9 @@ TEST(Remesh, AnEdgeLongerThanTheObjectIsRefusedWithItsRange) {
   Mesh open = input;
   open.cells.pop_back();
   EXPECT_THROW(remesh_surface(open, 0.004), MeshError);
+  Mesh inside_out = input;
+  for (Cell& c : inside_out.cells) std::swap(c.nodes[1], c.nodes[2]);
+  EXPECT_THROW(remesh_surface(inside_out, 0.004), MeshError);
 }
 
 }  // namespace
