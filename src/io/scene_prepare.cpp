@@ -65,7 +65,7 @@ Mesh remeshed(Mesh surface, double edge, const std::string& file, ObjectSpec& o)
         r.volume_after * 1e6, 100.0 * (r.volume_after - r.volume_before) / r.volume_before));
     return r.surface;
   } catch (const MeshError& e) {
-    throw MeshFileError(file, 0, 0, e.what());
+    throw MeshFileError(file, 0, 0, fmt::format("'remesh': {}", e.what()));
   }
 }
 
