@@ -384,9 +384,13 @@ bool finalized(const Model& model);
 // fibres, explicit finite elements): the stability estimate's and mass scaling's measure.
 std::vector<double> stiffness_row_sums(const Model& model);
 
-// The mesh a scene's MeshSpec describes: generated, or its file as the loader read it
-// (std::invalid_argument when it was not read).
+// The mesh a scene's MeshSpec describes: generated and placed by its transform, or its file as
+// the loader read and placed it (std::invalid_argument when it was not read).
 Mesh make_mesh(const MeshSpec& spec);
+
+// Applies `transform` to the mesh's points (scale, rotate, translate); cell orientation is
+// kept since every scale is positive.
+void place_mesh(Mesh& mesh, const MeshTransform& transform);
 
 // A scene file's description into a model; semantic problems (a node set that selects no
 // node, a volume constraint on an open surface, ...) throw SceneError with their location.

@@ -79,6 +79,17 @@ struct SimulationSpec {
   SourceLoc loc;
 };
 
+// `transform`: each point p becomes R(axis, angle) (scale * p) + translate (m).
+struct MeshTransform {
+  Eigen::Vector3d scale = Eigen::Vector3d::Ones();  // each > 0: no mirror
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  // unit
+  double angle = 0.0;                               // rad, right-handed about axis
+  Eigen::Vector3d translate = Eigen::Vector3d::Zero();
+  bool identity() const {
+    return scale == Eigen::Vector3d::Ones() && angle == 0.0 && translate.isZero(0.0);
+  }
+};
+
 struct MeshSpec {
   std::string generator;              // "box", "ellipsoid", "cylinder"
   CellType element = CellType::hexa;  // box: hexa|tetra
@@ -96,6 +107,8 @@ struct MeshSpec {
   std::string units = "m";                           // of the file's coordinates
   bool fill_tetra = false;                           // a closed surface file filled with tetrahedra
   std::optional<double> fill_edge;  // m, their largest edge inside (with fill_tetra)
+  std::optional<double> remesh;     // m: the file's surface remeshed to this edge
+  MeshTransform transform;          // file or generated mesh, before remesh and fill
   // The mesh of `file` in metres, as the loader read it (scene_io.hpp): compiling reads no
   // file.
   std::shared_ptr<const Mesh> file_mesh;

@@ -41,7 +41,18 @@ const std::vector<Section>& sections() {
       {"simulation", "simulation", "Time stepping and solver settings."},
       {"object", "objects[]", "Each entry of `objects`: one deformable body."},
       {"mesh", "objects[].mesh",
-       "The mesh of an object: generated (`generator`) or read from a file (`file`)."},
+       "The mesh of an object: generated (`generator`) or read from a file (`file`). A file's "
+       "mesh is scaled to metres (`units`), placed (`transform`), remeshed (`remesh`), then "
+       "filled (`fill`), in that order."},
+      {"transform", "objects[].mesh.transform",
+       "Places the mesh (file or generated) in the scene's frame, so that organs segmented from "
+       "one image sit where they belong: each point p becomes R (S p) + t, scale first, then "
+       "the rotation, then the translation. A mirror is refused (every scale > 0): it would "
+       "turn the cells inside out; a change of axes such as LPS to RAS is a rotation (180 deg "
+       "about z)."},
+      {"rotation", "objects[].mesh.transform.rotate",
+       "A rotation by `angle` about `axis` through the origin, right-handed (counterclockwise "
+       "seen from the axis tip): 90 deg about [0, 0, 1] takes x to y."},
       {"material", "objects[].material",
        "Shape-memory material of an object. Give its `density` or its total `mass`."},
       {"load", "loads[]",
@@ -405,6 +416,21 @@ std::vector<Parameter> mesh_parameters() {
        .when = {kFill},
        .doc = "With `fill` (required there): the largest edge of the tetrahedra inside."},
       {.section = "mesh",
+       .name = "remesh",
+       .kind = Kind::quantity,
+       .dimension = Dimension::length,
+       .range = gt(0),
+       .doc = "A closed surface read from `file` remeshed to triangles of about this edge "
+              "(isotropic remeshing, docs/meshing-remesh.md), after `transform` and before "
+              "`fill`; `phymul check` reports its quality and deviation. Too long an edge for "
+              "the surface (fewer than 20 triangles) is refused with the range."},
+      {.section = "mesh",
+       .name = "transform",
+       .kind = Kind::map,
+       .default_note = "none",
+       .child = "transform",
+       .doc = "Scale, rotation and translation of the mesh."},
+      {.section = "mesh",
        .name = "element",
        .kind = Kind::choice,
        .choices = {"hexa", "tetra"},
@@ -506,6 +532,41 @@ std::vector<Parameter> mesh_parameters() {
        .dimension = Dimension::length,
        .default_value = "[0, 0, 0]",
        .doc = "Centre of the generated mesh."},
+  };
+}
+
+std::vector<Parameter> transform_parameters() {
+  return {
+      {.section = "transform",
+       .name = "scale",
+       .kind = Kind::vector,
+       .range = gt(0),
+       .default_value = "[1, 1, 1]",
+       .uniform = true,
+       .doc = "Scale factors along x, y, z, or one for all three; applied first."},
+      {.section = "transform",
+       .name = "rotate",
+       .kind = Kind::map,
+       .default_note = "none",
+       .child = "rotation",
+       .doc = "Rotation, applied after the scale."},
+      {.section = "transform",
+       .name = "translate",
+       .kind = Kind::vector,
+       .dimension = Dimension::length,
+       .default_value = "[0, 0, 0]",
+       .doc = "Translation, applied last."},
+      {.section = "rotation",
+       .name = "axis",
+       .kind = Kind::vector,
+       .required = true,
+       .doc = "Rotation axis; any non-zero length."},
+      {.section = "rotation",
+       .name = "angle",
+       .kind = Kind::quantity,
+       .dimension = Dimension::angle,
+       .required = true,
+       .doc = "Rotation angle (`30 deg`, or radians without a unit)."},
   };
 }
 
@@ -1024,9 +1085,9 @@ const std::vector<Parameter>& parameters() {
     std::vector<Parameter> all;
     for (auto part :
          {scene_parameters(), simulation_parameters(), object_parameters(), mesh_parameters(),
-          material_parameters(), load_parameters(), constraint_parameters(), schedule_parameters(),
-          selector_parameters(), interaction_parameters(), needle_parameters(), output_parameters(),
-          component_parameters()})
+          transform_parameters(), material_parameters(), load_parameters(), constraint_parameters(),
+          schedule_parameters(), selector_parameters(), interaction_parameters(),
+          needle_parameters(), output_parameters(), component_parameters()})
       all.insert(all.end(), part.begin(), part.end());
     return all;
   }();

@@ -63,6 +63,7 @@ struct Parameter {
   std::vector<Condition> when{};  // all must hold for the field to exist
   std::string_view one_of{};      // group name: exactly one field of the group is given
   std::string_view child{};       // map and list: the section of the content
+  bool uniform = false;           // vector: a single value stands for [v, v, v]
   std::string_view doc{};
 };
 

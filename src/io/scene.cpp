@@ -188,6 +188,7 @@ class SceneBuilder {
   ObjectSpec object(SectionReader& reader);
   MeshSpec mesh(SectionReader& reader);
   void check_mesh_source(SectionReader& reader);
+  MeshTransform mesh_transform(SectionReader& reader);
   MaterialSpec material(SectionReader& reader);
   void load(SectionReader& reader, Scene& scene);
   ConstraintSpec constraint(SectionReader& reader);
@@ -424,22 +425,43 @@ MeshSpec SceneBuilder::mesh(SectionReader& reader) {
   if (spec.fill_tetra && !reader.value_loc("edge"))
     context_.error(*reader.value_loc("fill"),
                    "'fill' needs 'edge', the largest edge of the tetrahedra (a length)");
+  reader.read("remesh", spec.remesh);
+  if (auto transform = reader.map("transform")) spec.transform = mesh_transform(*transform);
   check_mesh_source(reader);
   reader.done();
   return spec;
+}
+
+MeshTransform SceneBuilder::mesh_transform(SectionReader& reader) {
+  MeshTransform t;
+  reader.read("scale", t.scale);
+  reader.read("translate", t.translate);
+  if (auto rotate = reader.map("rotate")) {
+    Eigen::Vector3d axis = t.axis;
+    if (rotate->read("axis", axis) && axis.cwiseAbs().maxCoeff() == 0.0)
+      context_.error(rotate->value_loc("axis").value_or(rotate->loc()),
+                     "'axis' of 'rotate' must be a non-zero vector (got [0, 0, 0])");
+    else
+      t.axis = axis.stableNormalized();
+    rotate->read("angle", t.angle);
+    rotate->done();
+  }
+  reader.done();
+  return t;
 }
 
 // A mesh from a file takes only `units`; the generators' keys would be silently ignored.
 void SceneBuilder::check_mesh_source(SectionReader& reader) {
   const bool from_file = reader.value_loc("file").has_value();
   for (const io::Parameter* p : io::section_parameters("mesh")) {
-    if (p->name == "generator") continue;  // the one_of check names both
-    const bool generator_key =
-        p->name != "file" && p->name != "units" && p->name != "fill" && p->name != "edge";
+    if (p->name == "generator" || p->name == "transform") continue;  // one_of: names both
+    const bool generator_key = p->name != "file" && p->name != "units" && p->name != "fill" &&
+                               p->name != "edge" && p->name != "remesh";
     if (from_file == generator_key)
       if (const auto at = reader.value_loc(p->name))
         context_.error(*at, from_file ? fmt::format("'{}' belongs to generated meshes; a mesh "
-                                                    "read from 'file' takes only 'units'",
+                                                    "read from 'file' takes only 'units', "
+                                                    "'transform', 'remesh', 'fill' and 'edge'",
                                                     p->name)
                                       : fmt::format("'{}' applies only to a mesh read from "
                                                     "'file'",

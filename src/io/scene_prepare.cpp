@@ -10,6 +10,7 @@
 #include "phymul/calibration.hpp"
 #include "phymul/mesh_io.hpp"
 #include "phymul/meshing.hpp"
+#include "phymul/model.hpp"
 #include "phymul/scene_io.hpp"
 
 namespace phymul {
@@ -37,6 +38,37 @@ Mesh fill(Mesh surface, double edge, const std::string& file, ObjectSpec& o) {
   }
 }
 
+// `remesh`: the closed surface read from the file remeshed to the edge; its quality, deviation
+// and volume change go to the file's notes.
+Mesh remeshed(Mesh surface, double edge, const std::string& file, ObjectSpec& o) {
+  if (surface.volumetric())
+    throw MeshFileError(file, 0, 0, "'remesh' needs a closed surface; this is a volume mesh");
+  for (const Cell& c : surface.cells)
+    if (c.type != CellType::triangle)
+      throw MeshFileError(
+          file, 0, 0,
+          fmt::format("'remesh' takes a triangle surface (got a {} cell)", cell_type_name(c.type)));
+  SurfaceCheck check = check_closed_surface(surface);  // a .vtk or .msh surface is not checked
+  if (!check.problems.empty())
+    throw MeshFileError(
+        file, 0, 0,
+        fmt::format("'remesh' needs a closed surface: {}", fmt::join(check.problems, "; ")));
+  try {
+    const Remeshed r = remesh_surface(surface, edge);
+    const SurfaceQuality& q = r.quality;
+    o.mesh.file_notes.push_back(fmt::format(
+        "{}: remeshed to {:g} mm: {} triangles and {} points, edges {:.3g}/{:.3g}/{:.3g} mm "
+        "(min/mean/max), smallest angle {:.1f} degrees, largest aspect ratio {:.2f}; at most "
+        "{:.3g} mm from the file's surface, enclosed volume {:.4g} mL -> {:.4g} mL ({:+.2f}%)",
+        file, edge * 1e3, q.triangles, r.surface.points.size(), q.edge_min * 1e3, q.edge_mean * 1e3,
+        q.edge_max * 1e3, q.min_angle_deg, q.max_aspect, r.deviation * 1e3, r.volume_before * 1e6,
+        r.volume_after * 1e6, 100.0 * (r.volume_after - r.volume_before) / r.volume_before));
+    return r.surface;
+  } catch (const MeshError& e) {
+    throw MeshFileError(file, 0, 0, fmt::format("'remesh': {}", e.what()));
+  }
+}
+
 // A mesh file's path is relative to the scene file; its problems are reported where they
 // are in it, naming the object whose mesh it is.
 void read_mesh(const Scene& scene, ObjectSpec& o, std::vector<Diagnostic>& problems) {
@@ -44,6 +76,8 @@ void read_mesh(const Scene& scene, ObjectSpec& o, std::vector<Diagnostic>& probl
   const io::Unit* unit = io::find_unit(o.mesh.units);
   try {
     Mesh mesh = read_mesh_file(path, unit ? unit->divisor / unit->scale : 1.0, &o.mesh.file_notes);
+    place_mesh(mesh, o.mesh.transform);  // units, transform, remesh, fill: as the reference says
+    if (o.mesh.remesh) mesh = remeshed(mesh, *o.mesh.remesh, path.string(), o);
     if (o.mesh.fill_tetra) mesh = fill(std::move(mesh), *o.mesh.fill_edge, path.string(), o);
     o.mesh.file_mesh = std::make_shared<const Mesh>(std::move(mesh));
   } catch (const MeshFileError& e) {

@@ -510,6 +510,11 @@ std::optional<std::array<Item, 3>> SectionReader::triple(const Value& value, Rea
 }
 
 std::optional<Eigen::Vector3d> SectionReader::vector(const Value& value, Dimension dimension) {
+  if (value.parameter->uniform && value.node.IsScalar()) {  // `scale: 2` is [2, 2, 2]
+    const auto one = quantity(value, value.node, in_quotes(value.parameter->name), dimension);
+    if (!one) return std::nullopt;
+    return Eigen::Vector3d::Constant(*one);
+  }
   const auto items = triple<double>(value, [&](const YAML::Node& node, std::string_view label) {
     return quantity(value, node, label, dimension);
   });

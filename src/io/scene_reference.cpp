@@ -35,7 +35,8 @@ std::string code_list(const std::vector<std::string_view>& words, std::string_vi
 std::string type_text(const Parameter& p) {
   // A quantity without dimension is what users call a number.
   const bool plain = p.kind == Kind::quantity && p.dimension == io::Dimension::none;
-  const std::string kind = plain ? "number" : std::string(io::kind_name(p.kind));
+  std::string kind = plain ? "number" : std::string(io::kind_name(p.kind));
+  if (p.uniform) kind += " or number";
   return p.keyword.empty() ? kind : fmt::format("{} or `{}`", kind, p.keyword);
 }
 

@@ -25,6 +25,7 @@ constexpr std::array kDimensions{
     DimensionInfo{Dimension::acceleration, "acceleration", "an acceleration", "m/s^2", "m/s^2, g0"},
     DimensionInfo{Dimension::rate, "rate", "a rate", "1/s", "1/s, Hz"},
     DimensionInfo{Dimension::volume, "volume", "a volume", "m^3", "m^3, L, mL"},
+    DimensionInfo{Dimension::angle, "angle", "an angle", "rad", "rad, deg"},
 };
 
 constexpr std::array kUnits{
@@ -67,6 +68,8 @@ constexpr std::array kUnits{
     Unit{"mL", Dimension::volume, 1, 1e6},
     Unit{"cm^3", Dimension::volume, 1, 1e6},
     Unit{"mm^3", Dimension::volume, 1, 1e9},
+    Unit{"rad", Dimension::angle, 1, 1},
+    Unit{"deg", Dimension::angle, 3.14159265358979323846, 180},  // "90 deg": pi/2 exactly
 };
 
 std::string_view trim(std::string_view s) {

@@ -20,6 +20,7 @@ enum class Dimension {
   acceleration,
   rate,
   volume,
+  angle,
 };
 
 struct DimensionInfo {

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <numbers>
 #include <set>
 #include <string>
 
@@ -63,6 +64,9 @@ TEST(UnitsTest, ConvertsEveryDimension) {
   EXPECT_DOUBLE_EQ(si("-1 g0", Dimension::acceleration), -9.80665);
   EXPECT_DOUBLE_EQ(si("-9.81 m/s^2", Dimension::acceleration), -9.81);
   EXPECT_DOUBLE_EQ(si("5 1/s", Dimension::rate), 5.0);
+  EXPECT_DOUBLE_EQ(si("90 deg", Dimension::angle), std::numbers::pi / 2);
+  EXPECT_DOUBLE_EQ(si("-180deg", Dimension::angle), -std::numbers::pi);
+  EXPECT_DOUBLE_EQ(si("0.5 rad", Dimension::angle), 0.5);
   EXPECT_DOUBLE_EQ(si("5 Hz", Dimension::rate), 5.0);
   EXPECT_DOUBLE_EQ(si("2 L", Dimension::volume), 2e-3);
   EXPECT_DOUBLE_EQ(si("3 mL", Dimension::volume), 3e-6);
