@@ -229,6 +229,7 @@ Scene SceneBuilder::build(const YAML::Node& root, const std::string& file) {
   for (auto& reference : interactions)
     references_.push_back({reference.name, reference.loc, reference.where});
   if (auto reader = top.map("output")) scene.output = output(*reader);
+  if (std::string lml; top.read("lml", lml)) scene.lml = LmlSpec{lml, false, *top.value_loc("lml")};
   top.done();
   check_names();
   check_references();
@@ -416,6 +417,7 @@ MeshSpec SceneBuilder::mesh(SectionReader& reader) {
   reader.read("center", spec.center);
   reader.read("file", spec.file);
   reader.read("units", spec.units);
+  reader.read("component", spec.component);
   spec.fill_tetra = reader.value_loc("fill").has_value();
   std::string fill;
   reader.read("fill", fill);
@@ -434,8 +436,8 @@ void SceneBuilder::check_mesh_source(SectionReader& reader) {
   const bool from_file = reader.value_loc("file").has_value();
   for (const io::Parameter* p : io::section_parameters("mesh")) {
     if (p->name == "generator") continue;  // the one_of check names both
-    const bool generator_key =
-        p->name != "file" && p->name != "units" && p->name != "fill" && p->name != "edge";
+    const bool generator_key = p->name != "file" && p->name != "units" && p->name != "fill" &&
+                               p->name != "edge" && p->name != "component";
     if (from_file == generator_key)
       if (const auto at = reader.value_loc(p->name))
         context_.error(*at, from_file ? fmt::format("'{}' belongs to generated meshes; a mesh "
