@@ -25,7 +25,7 @@ struct PmlComponent {
   std::vector<Cell> cells;  // TETRAHEDRON, HEXAHEDRON, WEDGE, TRIANGLE, QUAD, oriented as VTK's
   std::vector<int> atoms;   // every atom of its cells and atomRefs, sorted, unique
   std::vector<std::string> other_cells;  // types it holds that make no cell (LINE, POLY_VERTEX)
-  int line = 0;
+  int line = 0, column = 0;              // of its element
 };
 
 struct PmlModel {
@@ -45,9 +45,9 @@ PmlModel parse_pml(std::string_view text, const std::string& name, double diviso
 PmlModel read_pml(const std::filesystem::path& path, double divisor = 1.0);
 
 // The object of one component: its cells and only the atoms they use (renumbered in file
-// order; `atom_ids` gets each node's atom index), every named component as a node set of
-// the atoms it shares with it (names with characters other than letters, digits, '_' and
-// '-' get '_' there). An empty `component` takes the only exclusive component with cells.
+// order; `atom_ids` gets each node's atom index), every informative component as a node set
+// of the atoms it shares with it (named by pml_node_set_name). An empty `component` takes the
+// only exclusive structural component with cells.
 Mesh pml_object_mesh(const PmlModel& pml, const std::string& component, std::vector<int>* atom_ids,
                      const std::string& file_name);
 

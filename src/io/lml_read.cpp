@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <climits>
 #include <fstream>
@@ -147,6 +148,9 @@ void LmlReader::applied_to(const pugi::xml_node& node, LmlLoad& load) {
     };
     const auto first = whole(token.substr(0, dash));
     const auto last = dash == std::string_view::npos ? first : whole(token.substr(dash + 1));
+    if (token.front() == '-')
+      src_.fail(node,
+                fmt::format("<appliedTo> entry '{}' is negative (atom indices start at 0)", token));
     if (!std::isdigit(static_cast<unsigned char>(token.front()))) {
       load.names.emplace_back(token);  // a component's name
     } else if (!first || !last || *last < *first || *last - *first > 10'000'000) {

@@ -398,8 +398,9 @@ std::vector<Parameter> mesh_parameters() {
        .kind = Kind::text,
        .default_note = "the only exclusive component with cells",
        .doc = "A CamiTK PML `file` (docs/camitk.md): the exclusive component (structural or "
-              "multi) whose cells are the object's; its atoms become the nodes, every named "
-              "component a node set of the atoms it shares with them."},
+              "multi) whose cells are the object's; its atoms become the nodes, every "
+              "informative component a node set (of the atoms it shares with them; characters "
+              "other than letters, digits, '_' and '-' become '_' in its name)."},
       {.section = "mesh",
        .name = "units",
        .kind = Kind::choice,

@@ -10,6 +10,7 @@
 #include <optional>
 #include <set>
 #include <sstream>
+#include <tuple>
 #include <unordered_map>
 
 #include "io/xml_source.hpp"
@@ -181,7 +182,8 @@ void PmlReader::read_components(const pugi::xml_node& parent, bool exclusive,
       const int multi = int(model_.components.size());
       PmlComponent m;
       m.name = child.attribute("name").value();
-      m.exclusive = exclusive, m.multi = true, m.line = src_.where(child).first;
+      m.exclusive = exclusive, m.multi = true;
+      std::tie(m.line, m.column) = src_.where(child);
       model_.components.push_back(std::move(m));
       std::vector<int> below;
       read_components(child, exclusive, below);
@@ -202,7 +204,8 @@ void PmlReader::read_structural(const pugi::xml_node& sc, bool exclusive) {
   const int c = int(model_.components.size());
   PmlComponent made;
   made.name = sc.attribute("name").value();
-  made.exclusive = exclusive, made.line = src_.where(sc).first;
+  made.exclusive = exclusive;
+  std::tie(made.line, made.column) = src_.where(sc);
   model_.components.push_back(std::move(made));
   note_unread(sc, {"name", "mode"}, unread_component_);
   long long listed = 0;
@@ -406,13 +409,14 @@ Mesh pml_object_mesh(const PmlModel& pml, const std::string& component, std::vec
                      const std::string& file) {
   const PmlComponent& c = choose(pml, component, file);
   if (!c.other_cells.empty())
-    throw MeshFileError(file, c.line, 0,
+    throw MeshFileError(file, c.line, c.column,
                         fmt::format("component '{}' holds {} cells, which make no object (an "
                                     "object's cells are TETRAHEDRON, HEXAHEDRON, WEDGE, TRIANGLE "
                                     "or QUAD)",
                                     c.name, fmt::join(c.other_cells, ", ")));
   if (c.cells.empty())
-    throw MeshFileError(file, c.line, 0, fmt::format("component '{}' holds no cell", c.name));
+    throw MeshFileError(file, c.line, c.column,
+                        fmt::format("component '{}' holds no cell", c.name));
   // Only the atoms its cells use, in file order.
   std::vector<int> local(pml.atoms.size(), -1);
   for (const Cell& cell : c.cells)
@@ -431,6 +435,7 @@ Mesh pml_object_mesh(const PmlModel& pml, const std::string& component, std::vec
     mesh.cells.push_back(cell);
   }
   for (const PmlComponent& named : pml.components) {
+    if (named.exclusive || named.multi) continue;  // the informative structural components
     std::vector<int> set;
     for (int a : named.atoms)
       if (local[size_t(a)] >= 0) set.push_back(local[size_t(a)]);

@@ -52,9 +52,16 @@ Source::Source(std::string_view text, std::string name) : text_(text), name_(std
   const pugi::xml_parse_result result =
       doc_.load_buffer(text.data(), text.size(), pugi::parse_default, pugi::encoding_utf8);
   if (!result) {
-    const auto [line, column] = line_column(text_, size_t(std::max<ptrdiff_t>(result.offset, 0)));
+    const size_t offset = size_t(std::max<ptrdiff_t>(result.offset, 0));
+    const auto [line, column] = line_column(text_, offset);
+    // pugixml reports a file cut short as a mismatch at its end.
+    const size_t end = text_.find_last_not_of(" \t\r\n");
+    const bool cut = (end == std::string_view::npos || offset >= end) &&
+                     result.status == pugi::status_end_element_mismatch;
     throw MeshFileError(name_, line, column,
-                        fmt::format("not well-formed XML: {}", result.description()));
+                        cut ? "not well-formed XML: the file ends before its elements close "
+                              "(truncated?)"
+                            : fmt::format("not well-formed XML: {}", result.description()));
   }
 }
 
