@@ -1,5 +1,6 @@
 // CamiTK PML and LML reading (camitk.hpp): sparse atom indices, every cell type in VTK's
 // orientation, informative components as node sets, LML units and events, bad files.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -7,6 +8,7 @@
 #include <sstream>
 
 #include "phymul/camitk.hpp"
+#include "phymul/scene_io.hpp"
 #include "support/process.hpp"
 
 namespace phymul {
@@ -185,6 +187,38 @@ TEST(Lml, EventsDirectionsAndUnitsInSI) {
                       "default.lml")[0]
                 .unit,
             "N");
+}
+
+// The fuzz seeds (tests/data/camitk) as a scene: the hexahedron held at its bottom face and
+// pressed on z only, a force on the tetrahedron's tip from 0.5 s, a pressure on the quad (a
+// single quad makes no object that runs; compiling LML loads is camitk_export_test's).
+TEST(CamitkScene, LmlLoadsBecomeConstraintsLoadsAndPressuresOfThePmlObjects) {
+  const fs::path dir = testing::source_dir() / "tests/data/camitk";
+  std::string text = "objects:\n";
+  for (const char* c : {"Hex", "Tet", "Quad"})
+    text += fmt::format(
+        "  - name: {}\n    mesh: {{file: cells.pml, component: {}, units: mm}}\n"
+        "    material: {{stiffness: 10 N/m, mass: 0.001 kg}}\n",
+        c, c);
+  const std::string name = (dir / "scene.yaml").string();  // never written: paths are its
+  Scene scene = parse_scene(text + "lml: loads.lml\n", name);
+  ASSERT_EQ(scene.constraints.size(), 2u);
+  EXPECT_EQ(scene.constraints[0].kind, ConstraintSpec::Kind::fixed);
+  EXPECT_EQ(scene.constraints[0].nodes.indices, (std::vector<int>{0, 3, 4, 7}));
+  EXPECT_EQ(scene.constraints[1].kind, ConstraintSpec::Kind::displacement);
+  EXPECT_EQ(scene.constraints[1].axes, (std::array<bool, 3>{false, false, true}));
+  EXPECT_EQ(scene.constraints[1].displacement.at(1.0), Vec3(0, 0, -0.002));
+  EXPECT_EQ(scene.constraints[1].nodes.loc.line, 11);
+  ASSERT_EQ(scene.loads.size(), 1u);
+  EXPECT_EQ(scene.loads[0].object, "Tet");
+  EXPECT_EQ(scene.loads[0].nodes.indices, (std::vector<int>{3}));
+  EXPECT_EQ(scene.loads[0].force.at(0.4), Vec3::Zero());  // CamiTK: nothing before its date
+  EXPECT_EQ(scene.loads[0].force.at(0.5), Vec3(0, 0, -0.1));
+  ASSERT_EQ(scene.pressures.size(), 1u);
+  EXPECT_EQ(scene.pressures[0].pressure.at(1.0).x(), 1500.0);
+  EXPECT_EQ(scene.pressures[0].nodes.indices, (std::vector<int>{0, 1, 2, 3}));
+  prepare_scene(scene);  // once only
+  EXPECT_EQ(scene.constraints.size(), 2u);
 }
 
 // expected.txt as "file | message".
