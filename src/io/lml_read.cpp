@@ -7,6 +7,7 @@
 #include <cctype>
 #include <charconv>
 #include <climits>
+#include <cmath>
 #include <fstream>
 #include <numeric>
 #include <sstream>
@@ -17,6 +18,8 @@
 
 namespace phymul {
 namespace {
+
+constexpr size_t kMaxAtoms = 10'000'000;  // in one <appliedTo>: guards the memory ranges take
 
 struct LmlUnit {
   std::string_view symbol;
@@ -153,11 +156,13 @@ void LmlReader::applied_to(const pugi::xml_node& node, LmlLoad& load) {
                 fmt::format("<appliedTo> entry '{}' is negative (atom indices start at 0)", token));
     if (!std::isdigit(static_cast<unsigned char>(token.front()))) {
       load.names.emplace_back(token);  // a component's name
-    } else if (!first || !last || *last < *first || *last - *first > 10'000'000) {
+    } else if (!first || !last || *last < *first) {
       src_.fail(node, fmt::format("<appliedTo> entry '{}' is not an atom index or a range "
                                   "first-last",
                                   token));
     } else {
+      if (load.atoms.size() + size_t(*last - *first) >= kMaxAtoms)
+        src_.fail(node, fmt::format("<appliedTo> selects more than {} atoms", kMaxAtoms));
       for (long long i = *first; i <= *last; ++i) load.atoms.push_back(int(i));
     }
   }
@@ -197,7 +202,12 @@ void LmlReader::events(const pugi::xml_node& node, const LmlType& type, LmlLoad&
   for (const pugi::xml_node& e : node.children("valueEvent")) {
     const double date = src_.number(e, "date");
     if (date < 0.0) src_.fail(e, fmt::format("<valueEvent> date must be >= 0 s, found {}", date));
-    events.emplace_back(date, src_.number(e, "value") * unit->scale / unit->divisor);
+    const double value = src_.number(e, "value") * unit->scale / unit->divisor;
+    // In SI and along the direction, it must stay a number.
+    if (!std::isfinite(value) || !std::isfinite(value * load.direction.cwiseAbs().maxCoeff()))
+      src_.fail(e, fmt::format("<valueEvent> value {} {} is too large",
+                               e.attribute("value").value(), load.unit));
+    events.emplace_back(date, value);
     at.push_back(e);
   }
   if (events.empty()) src_.fail(node, "<load> has no <valueEvent date=\"..\" value=\"..\"/>");

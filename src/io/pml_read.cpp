@@ -39,6 +39,8 @@ constexpr std::array<CellKind, 10> kCellKinds{{
     {"PYRAMID", std::nullopt, 5},
 }};
 
+constexpr int kMaxDepth = 64;  // multiComponents in one another: the reader recurses
+
 const CellKind* find_kind(std::string_view name) {
   for (const CellKind& k : kCellKinds)
     if (k.name == name) return &k;
@@ -69,7 +71,8 @@ class PmlReader {
  private:
   void read_atoms(const pugi::xml_node& atoms);
   void read_atom(const pugi::xml_node& atom);
-  void read_components(const pugi::xml_node& parent, bool exclusive, std::vector<int>& members);
+  void read_components(const pugi::xml_node& parent, bool exclusive, std::vector<int>& members,
+                       int depth);
   void read_structural(const pugi::xml_node& sc, bool exclusive);
   void read_cell(const pugi::xml_node& node, int component);
   void add_cell(int component, int cell);
@@ -109,7 +112,7 @@ PmlModel PmlReader::read() {
   read_atoms(atoms);
   for (const char* list : {"exclusiveComponents", "informativeComponents"}) {
     std::vector<int> members;
-    read_components(root.child(list), std::string_view(list) == "exclusiveComponents", members);
+    read_components(root.child(list), std::string_view(list) == "exclusiveComponents", members, 0);
   }
   resolve_cell_refs();
   for (PmlComponent& c : model_.components) {
@@ -175,7 +178,9 @@ void PmlReader::read_atom(const pugi::xml_node& atom) {
 // The components under `parent`, depth first; `members` gets the structural components
 // read (for the multiComponent that holds them).
 void PmlReader::read_components(const pugi::xml_node& parent, bool exclusive,
-                                std::vector<int>& members) {
+                                std::vector<int>& members, int depth) {
+  if (depth > kMaxDepth)
+    src_.fail(parent, fmt::format("components nested deeper than {} levels", kMaxDepth));
   for (const pugi::xml_node& child : parent.children()) {
     const std::string_view name = child.name();
     if (name == "multiComponent") {
@@ -186,7 +191,7 @@ void PmlReader::read_components(const pugi::xml_node& parent, bool exclusive,
       std::tie(m.line, m.column) = src_.where(child);
       model_.components.push_back(std::move(m));
       std::vector<int> below;
-      read_components(child, exclusive, below);
+      read_components(child, exclusive, below, depth + 1);
       finish_multi(multi, below);
       members.insert(members.end(), below.begin(), below.end());
     } else if (name == "structuralComponent") {
