@@ -36,6 +36,7 @@ PUBLIC = {
     "scene_io.hpp": "io",
     "checkpoint.hpp": "io",
     "installation.hpp": "io",
+    "camitk.hpp": "io",
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"')
 

@@ -46,6 +46,7 @@ int check(const std::string& file) {
     const phymul::Model model = phymul::compile_scene(scene);
     for (const phymul::ObjectSpec& o : scene.objects)  // what reading a surface repaired
       for (const std::string& note : o.mesh.file_notes) std::cout << "  " << note << '\n';
+    for (const std::string& note : scene.notes) std::cout << "  " << note << '\n';
     print_stiffness_calibrations(model.stiffness_calibrations);
     if (scene.simulation.solver == phymul::StaticSolver::newton) {  // no time step to speak of
       std::cout << fmt::format("{}: ok ({} objects, {} nodes, {} cells; static, Newton)\n", file,
@@ -173,6 +174,7 @@ int main(int argc, char** argv) {
   const auto sweep = phymul::cli::add_sweep_command(app);
   const auto mesh = phymul::cli::add_mesh_command(app);
   const auto serve = phymul::cli::add_serve_command(app);
+  const auto export_pml = phymul::cli::add_export_pml_command(app);
 
   // CLI11 alone reports an unknown command as "A subcommand is required": name it instead.
   if (argc > 1 && argv[1][0] != '-') {
@@ -205,6 +207,7 @@ int main(int argc, char** argv) {
     if (*sweep.app) return sweep.run();
     if (*mesh.app) return mesh.run();
     if (*serve.app) return serve.run();
+    if (*export_pml.app) return export_pml.run();
     std::cout << phymul::scene_reference_markdown();
     return 0;
   } catch (const std::exception& e) {

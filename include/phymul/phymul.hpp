@@ -8,6 +8,7 @@
 #pragma once
 
 #include "phymul/calibration.hpp"
+#include "phymul/camitk.hpp"
 #include "phymul/checkpoint.hpp"
 #include "phymul/data.hpp"
 #include "phymul/fem.hpp"

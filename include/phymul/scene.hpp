@@ -105,7 +105,8 @@ struct MeshSpec {
   Eigen::Vector3d center = Eigen::Vector3d::Zero();  // m
   std::string file;                                  // instead of a generator
   std::string units = "m";                           // of the file's coordinates
-  bool fill_tetra = false;                           // a closed surface file filled with tetrahedra
+  std::string component;            // a PML file: the component whose cells are the object's
+  bool fill_tetra = false;          // a closed surface file filled with tetrahedra
   std::optional<double> fill_edge;  // m, their largest edge inside (with fill_tetra)
   std::optional<double> remesh;     // m: the file's surface remeshed to this edge
   MeshTransform transform;          // file or generated mesh, before remesh and fill
@@ -113,6 +114,7 @@ struct MeshSpec {
   // file.
   std::shared_ptr<const Mesh> file_mesh;
   std::vector<std::string> file_notes;  // what reading it repaired (merged points, orientation)
+  std::vector<int> atom_ids;            // a PML file: each node's atom index there (for LML loads)
   SourceLoc loc;
 };
 
@@ -323,6 +325,14 @@ struct OutputSpec {
   SourceLoc loc;
 };
 
+// CamiTK LML loads (top-level `lml:`, docs/camitk.md): turned into loads, constraints and
+// pressures of the objects read from a PML file when the scene is prepared, once.
+struct LmlSpec {
+  std::string file;  // relative to the scene file
+  bool applied = false;
+  SourceLoc loc;
+};
+
 struct Scene {
   std::filesystem::path file;
   SimulationSpec simulation;
@@ -335,6 +345,8 @@ struct Scene {
   std::vector<ContactSpec> contacts;
   std::vector<NeedleSpec> needles;
   OutputSpec output;
+  std::optional<LmlSpec> lml;
+  std::vector<std::string> notes;  // what preparing it noticed that the objects' notes do not say
 };
 
 }  // namespace phymul

@@ -9,6 +9,7 @@
 
 #include "io/mesh_text.hpp"
 #include "mesh/surface_check.hpp"
+#include "phymul/camitk.hpp"
 #include "phymul/mesh_io.hpp"
 
 namespace phymul {
@@ -196,12 +197,18 @@ Mesh read_mesh_file(const std::filesystem::path& path, double divisor,
   if (ext == ".ply") return parse_ply_mesh(text, path.string(), divisor, notes);
   if (ext == ".vtu") return parse_vtu_mesh(text, path.string(), divisor);
   if (ext == ".vtp") return parse_vtp_mesh(text, path.string(), divisor, notes);
-  throw MeshFileError(path.string(), 0, 0,
-                      fmt::format("unknown mesh file type '{}': expected .vtk (legacy VTK ASCII), "
-                                  ".vtu (VTK XML unstructured grid), .msh (Gmsh ASCII 4.1 or "
-                                  "2.2), or a closed surface: .stl (ASCII or binary), .obj, .ply "
-                                  "(ASCII or binary), .vtp (VTK XML PolyData)",
-                                  ext));
+  if (ext == ".pml") {  // its only exclusive component with cells
+    const PmlModel pml = parse_pml(text, path.string(), divisor);
+    if (notes) notes->insert(notes->end(), pml.notes.begin(), pml.notes.end());
+    return pml_object_mesh(pml, "", nullptr, path.string());
+  }
+  throw MeshFileError(
+      path.string(), 0, 0,
+      fmt::format("unknown mesh file type '{}': expected .vtk (legacy VTK ASCII), "
+                  ".vtu (VTK XML unstructured grid), .msh (Gmsh ASCII 4.1 or "
+                  "2.2), or a closed surface: .stl (ASCII or binary), .obj, .ply "
+                  "(ASCII or binary), .vtp (VTK XML PolyData), or a CamiTK physical model .pml",
+                  ext));
 }
 
 }  // namespace phymul

@@ -178,6 +178,16 @@ std::vector<Parameter> scene_parameters() {
        .default_note = "defaults",
        .child = "output",
        .doc = "Output settings."},
+      {.section = "scene",
+       .name = "lml",
+       .kind = Kind::path,
+       .default_note = "none",
+       .doc = "CamiTK LML loads (docs/camitk.md), relative to the scene file: their atom indices "
+              "are those of the PML file the objects' meshes come from. Translation: the nodes' "
+              "displacement on the axes its direction gives (`NULL`: held at 0; all three held "
+              "at 0: fixed nodes); Force: a nodal force; Pressure: a pressure on the boundary "
+              "faces whose nodes are all loaded. Units: mm, microm, nm; N, kN, pN; kPa, mmHg "
+              "(or SI)."},
   };
 }
 
@@ -394,7 +404,16 @@ std::vector<Parameter> mesh_parameters() {
               "cells, physical groups become node sets). All volume or all surface cells. Or a "
               "closed surface: STL (ASCII or binary), OBJ, PLY (ASCII or binary) or VTK XML "
               "PolyData (`.vtp`, its polygons), checked closed, manifold and free of crossing "
-              "triangles, its orientation made outward."},
+              "triangles, its orientation made outward. Or a CamiTK PML physical model (`.pml`, "
+              "docs/camitk.md), one of its components (`component`)."},
+      {.section = "mesh",
+       .name = "component",
+       .kind = Kind::text,
+       .default_note = "the only exclusive component with cells",
+       .doc = "A CamiTK PML `file` (docs/camitk.md): the exclusive component (structural or "
+              "multi) whose cells are the object's; its atoms become the nodes, every "
+              "informative component a node set (of the atoms it shares with them; characters "
+              "other than letters, digits, '_' and '-' become '_' in its name)."},
       {.section = "mesh",
        .name = "units",
        .kind = Kind::choice,
@@ -1166,6 +1185,8 @@ std::string_view kind_name(Kind kind) {
       return "map";
     case Kind::path:
       return "file path";
+    case Kind::text:
+      return "text";
   }
   return "?";
 }

@@ -30,6 +30,7 @@ enum class Kind {
   list,             // list of maps, each described by section `child`
   map,              // map described by section `child`
   path,             // a file path, relative to the scene file's directory
+  text,             // any non-empty text (a component name of a file, spaces allowed)
 };
 
 // Allowed interval, applied to each component of vectors and to the entry count of lists.

@@ -230,6 +230,7 @@ Scene SceneBuilder::build(const YAML::Node& root, const std::string& file) {
   for (auto& reference : interactions)
     references_.push_back({reference.name, reference.loc, reference.where});
   if (auto reader = top.map("output")) scene.output = output(*reader);
+  if (std::string lml; top.read("lml", lml)) scene.lml = LmlSpec{lml, false, *top.value_loc("lml")};
   top.done();
   check_names();
   check_references();
@@ -417,6 +418,7 @@ MeshSpec SceneBuilder::mesh(SectionReader& reader) {
   reader.read("center", spec.center);
   reader.read("file", spec.file);
   reader.read("units", spec.units);
+  reader.read("component", spec.component);
   spec.fill_tetra = reader.value_loc("fill").has_value();
   std::string fill;
   reader.read("fill", fill);
@@ -456,7 +458,7 @@ void SceneBuilder::check_mesh_source(SectionReader& reader) {
   for (const io::Parameter* p : io::section_parameters("mesh")) {
     if (p->name == "generator" || p->name == "transform") continue;  // one_of: names both
     const bool generator_key = p->name != "file" && p->name != "units" && p->name != "fill" &&
-                               p->name != "edge" && p->name != "remesh";
+                               p->name != "edge" && p->name != "remesh" && p->name != "component";
     if (from_file == generator_key)
       if (const auto at = reader.value_loc(p->name))
         context_.error(*at, from_file ? fmt::format("'{}' belongs to generated meshes; a mesh "

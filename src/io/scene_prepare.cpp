@@ -5,9 +5,11 @@
 
 #include <memory>
 
+#include "io/scene_lml.hpp"
 #include "io/units.hpp"
 #include "mesh/surface_check.hpp"
 #include "phymul/calibration.hpp"
+#include "phymul/camitk.hpp"
 #include "phymul/mesh_io.hpp"
 #include "phymul/meshing.hpp"
 #include "phymul/model.hpp"
@@ -15,6 +17,13 @@
 
 namespace phymul {
 namespace {
+
+// A PML's component, with each node's atom index (for the scene's LML loads).
+Mesh read_pml_mesh(const std::filesystem::path& path, double divisor, MeshSpec& spec) {
+  const PmlModel pml = read_pml(path, divisor);
+  spec.file_notes.insert(spec.file_notes.end(), pml.notes.begin(), pml.notes.end());
+  return pml_object_mesh(pml, spec.component, &spec.atom_ids, path.string());
+}
 
 // `fill: tetra`: the closed surface read from the file, checked, filled with tetrahedra; their
 // quality goes to the file's notes.
@@ -74,8 +83,22 @@ Mesh remeshed(Mesh surface, double edge, const std::string& file, ObjectSpec& o)
 void read_mesh(const Scene& scene, ObjectSpec& o, std::vector<Diagnostic>& problems) {
   const std::filesystem::path path = scene.file.parent_path() / o.mesh.file;
   const io::Unit* unit = io::find_unit(o.mesh.units);
+  const double divisor = unit ? unit->divisor / unit->scale : 1.0;
+  if (!o.mesh.component.empty() && path.extension() != ".pml") {
+    problems.push_back({o.mesh.loc, fmt::format("'component' applies only to a CamiTK PML file "
+                                                "(.pml), not {}",
+                                                o.mesh.file)});
+    return;
+  }
+  if (o.mesh.remesh && path.extension() == ".pml") {  // its atoms are what the LML loads name
+    problems.push_back({o.mesh.loc, fmt::format("'remesh' does not apply to a CamiTK PML file "
+                                                "({}): its atoms are the nodes its loads name",
+                                                o.mesh.file)});
+    return;
+  }
   try {
-    Mesh mesh = read_mesh_file(path, unit ? unit->divisor / unit->scale : 1.0, &o.mesh.file_notes);
+    Mesh mesh = path.extension() == ".pml" ? read_pml_mesh(path, divisor, o.mesh)
+                                           : read_mesh_file(path, divisor, &o.mesh.file_notes);
     place_mesh(mesh, o.mesh.transform);  // units, transform, remesh, fill: as the reference says
     if (o.mesh.remesh) mesh = remeshed(mesh, *o.mesh.remesh, path.string(), o);
     if (o.mesh.fill_tetra) mesh = fill(std::move(mesh), *o.mesh.fill_edge, path.string(), o);
@@ -112,6 +135,8 @@ void prepare_scene(Scene& scene) {
   std::vector<Diagnostic> problems;
   for (ObjectSpec& o : scene.objects)
     if (!o.mesh.file.empty() && !o.mesh.file_mesh) read_mesh(scene, o, problems);
+  if (!problems.empty()) throw SceneError(std::move(problems));
+  io::apply_lml(scene, problems);
   if (!problems.empty()) throw SceneError(std::move(problems));
   for (ObjectSpec& o : scene.objects)
     if (o.type != ObjectType::rigid && o.material.model == ElasticModel::shape_memory &&

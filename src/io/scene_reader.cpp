@@ -430,11 +430,11 @@ bool SectionReader::read(std::string_view name, bool& out) {
 }
 
 bool SectionReader::read(std::string_view name, std::string& out) {
-  const auto value = lookup(name, {Kind::name, Kind::choice, Kind::path});
+  const auto value = lookup(name, {Kind::name, Kind::choice, Kind::path, Kind::text});
   if (!value) return false;
   const Parameter& field = *value->parameter;
-  if (field.kind == Kind::path) {
-    const auto path = scalar(*value, "a file path");
+  if (field.kind == Kind::path || field.kind == Kind::text) {
+    const auto path = scalar(*value, field.kind == Kind::path ? "a file path" : "a text");
     if (path && path->empty()) error(value->loc, fmt::format("{} is empty", in_quotes(name)));
     if (!path || path->empty()) return false;
     out = *path;

@@ -1,0 +1,2 @@
+solid cube
+facet normal 0 0 1
