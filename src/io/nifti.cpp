@@ -49,6 +49,7 @@ struct Header {
 struct Reader {
   std::string name;
   std::vector<std::string>* notes;
+  bool gzip = false;
 
   [[noreturn]] void fail(const std::string& message) const {
     throw MeshFileError(name, 0, 0, message);
@@ -68,9 +69,9 @@ struct Reader {
 Header byte_order(std::string_view bytes, const Reader& r) {
   if (bytes.size() < kHeaderSize)
     r.fail(
-        fmt::format("{} bytes, too short for a NIfTI-1 header ({} bytes): truncated, or "
+        fmt::format("{} bytes{}, too short for a NIfTI-1 header ({} bytes): truncated, or "
                     "not a NIfTI file",
-                    bytes.size(), kHeaderSize));
+                    bytes.size(), r.gzip ? " once decompressed" : "", kHeaderSize));
   Header h{bytes, false};
   const std::int32_t size = h.get<std::int32_t>(0);
   if (size == 348) return h;
@@ -271,9 +272,9 @@ bool is_nifti_path(const std::filesystem::path& path) {
 
 LabelImage parse_nifti_labels(std::string_view bytes, const std::string& name,
                               std::vector<std::string>* notes) {
-  const Reader r{name, notes};
+  const Reader r{name, notes, io::is_gzip(bytes)};
   std::string inflated;
-  if (io::is_gzip(bytes)) {
+  if (r.gzip) {
     try {
       // The header first: it says how much data to expect, and no more is inflated.
       inflated = io::gunzip(bytes, kHeaderSize);
@@ -301,11 +302,11 @@ LabelImage parse_nifti_labels(std::string_view bytes, const std::string& name,
   const size_t count = size_t(image.dims[0]) * size_t(image.dims[1]) * size_t(image.dims[2]);
   const size_t need = count * size_t(type.bytes);
   if (bytes.size() < offset || bytes.size() - offset < need)
-    r.fail(
-        fmt::format("the voxel data ({} x {} x {} {}) needs {} bytes after vox_offset {}, the "
-                    "file holds {} (truncated, or wrong dim?)",
-                    image.dims[0], image.dims[1], image.dims[2], type.name, need, offset,
-                    bytes.size() > offset ? bytes.size() - offset : 0));
+    r.fail(fmt::format(
+        "the voxel data ({} x {} x {} {}) needs {} bytes after vox_offset {}, the "
+        "file holds {}{} (truncated, or wrong dim?)",
+        image.dims[0], image.dims[1], image.dims[2], type.name, need, offset,
+        bytes.size() > offset ? bytes.size() - offset : 0, r.gzip ? " once decompressed" : ""));
   const Header data{bytes.substr(offset), h.swap};
   image.labels.resize(count);
   for (size_t v = 0; v < count; ++v)

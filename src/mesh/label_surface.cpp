@@ -220,9 +220,10 @@ Mesh label_surface(const LabelImage& image, std::span<const int> labels, double 
   const size_t voxels = make_mask(v, labels);
   orient(v);
   const double h = kGridPerEdge * edge * 1e3;  // mm
-  // Distances clamped at a slice and two grid steps: deep inside, ends cap at the last slice's
-  // outer face as the voxels do; the clamp keeps Catmull-Rom's overshoot small.
-  const double limit = v.s[2];
+  // Distances clamped at a slice or two grid steps: deep inside, the ends cap at the last
+  // slice's outer face as the voxels do; contours moving less than that between slices are
+  // interpolated exactly; the clamp keeps Catmull-Rom's overshoot small.
+  const double limit = std::max(v.s[2], 2.0 * h);
   const int pad_a = int(std::ceil((limit + 2.0 * h) / v.s[0])) + 2,
             pad_b = int(std::ceil((limit + 2.0 * h) / v.s[1])) + 2;
   const Slices slices = slice_distances(v, limit, pad_a, pad_b);
