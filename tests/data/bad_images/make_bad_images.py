@@ -56,3 +56,14 @@ save("nan_voxel.nii", patch(base(np.float32), 352, "f", float("nan")))
 save("fractional_label.nii.gz", patch(base(np.float32), 352, "f", 0.5))
 save("bad_units.nii", patch(base(), 123, "B", 5))
 save("no_voxel_of_the_label.nii.gz", base(value=2))
+
+# Good small seeds for the fuzz target (make fuzz): tests/data/images.
+SEEDS = HERE.parent / "images"
+SEEDS.mkdir(exist_ok=True)
+i, j, k = np.meshgrid(np.arange(12), np.arange(10), np.arange(6), indexing="ij")
+ball = ((((i - 5.5) * 0.6) ** 2 + ((j - 4.5) * 0.6) ** 2 + ((k - 2.5) * 2.0) ** 2) <= 9).astype(np.uint8)
+nib.save(nib.Nifti1Image(ball, np.diag([0.6, 0.6, 2.0, 1.0])), str(SEEDS / "ball_sform.nii"))
+qform = nib.Nifti1Image(ball.astype(">i2"), None, header=nib.Nifti1Header(endianness=">"))
+qform.set_qform(np.diag([0.6, 0.6, -2.0, 1.0]), code=1)
+qform.set_sform(None, code=0)
+nib.save(qform, str(SEEDS / "ball_qform_big_endian.nii.gz"))
