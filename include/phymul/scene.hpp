@@ -94,6 +94,7 @@ struct MeshSpec {
   Eigen::Vector3d center = Eigen::Vector3d::Zero();  // m
   std::string file;                                  // instead of a generator
   std::string units = "m";                           // of the file's coordinates
+  std::vector<int> labels;                           // a label image's labels that make the object
   bool fill_tetra = false;                           // a closed surface file filled with tetrahedra
   std::optional<double> fill_edge;  // m, their largest edge inside (with fill_tetra)
   // The mesh of `file` in metres, as the loader read it (scene_io.hpp): compiling reads no

@@ -177,3 +177,23 @@ def test_the_prostate_segmentation_makes_a_closed_positive_mesh_of_its_volume(tm
     assert (np.unique(edges, axis=0, return_counts=True)[1] == 2).all()
     assert re.search(r"smallest dihedral angle [\d.]+ degrees, largest radius-edge ratio", out)
     assert "against the voxels" in out
+
+
+def test_a_scene_meshes_a_label_image_as_the_command_does(tmp_path):
+    data, affine, _, _ = ellipsoid_image(rotation([1, 0, 0], 15), [5.0, 6.0, 7.0])
+    write(tmp_path, "ball.nii.gz", nib.Nifti1Image(data, affine))
+    (tmp_path / "ball.yaml").write_text("""
+simulation: {duration: 0.01 s}
+objects:
+  - name: ball
+    mesh: {file: ball.nii.gz, labels: [1], fill: tetra, edge: 3 mm}
+    material: {stiffness: 50 N/m, density: 1000 kg/m^3}
+""")
+    code, out = run_cli("check", tmp_path / "ball.yaml")
+    assert code == 0, out
+    _, command = run_cli("mesh", tmp_path / "ball.nii.gz", "--labels", "1", "--edge", "3 mm",
+                         "-o", tmp_path / "ball.vtu")
+    tetrahedra = re.search(r"ball.vtu: (\d+) tetrahedra, (\d+) points", command)
+    assert f"ok (1 objects, {tetrahedra.group(2)} nodes, {tetrahedra.group(1)} cells" in out
+    surface = re.search(r"encloses ([\d.]+) mL", command).group(1)
+    assert f"enclosing {surface} mL" in out

@@ -381,7 +381,17 @@ std::vector<Parameter> mesh_parameters() {
               "2.2 (`.msh`; the highest-dimension elements are the cells, physical groups become "
               "node sets). All volume or all surface cells. Or a closed surface: STL (ASCII or "
               "binary), OBJ or PLY (ASCII or binary), checked closed, manifold and free of "
-              "crossing triangles, its orientation made outward."},
+              "crossing triangles, its orientation made outward. Or a label image (a "
+              "segmentation): NIfTI-1, `.nii` or `.nii.gz`, with `labels` and `fill`; its "
+              "chosen labels become a smooth closed surface in the image's physical frame "
+              "(docs/anatomy.md), then tetrahedra."},
+      {.section = "mesh",
+       .name = "labels",
+       .kind = Kind::integers,
+       .range = closed(-2147483648.0, 2147483647.0),
+       .default_note = "required for a label image",
+       .doc = "A label image `file` (`.nii`, `.nii.gz`): the labels whose voxels make the object "
+              "(e.g. `[1, 2]`: a gland's two zones together)."},
       {.section = "mesh",
        .name = "units",
        .kind = Kind::choice,
@@ -401,7 +411,8 @@ std::vector<Parameter> mesh_parameters() {
        .dimension = Dimension::length,
        .range = gt(0),
        .when = {kFill},
-       .doc = "With `fill` (required there): the largest edge of the tetrahedra inside."},
+       .doc = "With `fill` (required there): the largest edge of the tetrahedra inside; for a "
+              "label image also the surface triangles' size."},
       {.section = "mesh",
        .name = "element",
        .kind = Kind::choice,
@@ -1097,6 +1108,8 @@ std::string_view kind_name(Kind kind) {
       return "scalar schedule";
     case Kind::names:
       return "list of names";
+    case Kind::integers:
+      return "list of whole numbers";
     case Kind::list:
       return "list of maps";
     case Kind::map:

@@ -8,8 +8,10 @@
 #include "io/units.hpp"
 #include "mesh/surface_check.hpp"
 #include "phymul/calibration.hpp"
+#include "phymul/label_surface.hpp"
 #include "phymul/mesh_io.hpp"
 #include "phymul/meshing.hpp"
+#include "phymul/nifti.hpp"
 #include "phymul/scene_io.hpp"
 
 namespace phymul {
@@ -37,13 +39,34 @@ Mesh fill(Mesh surface, double edge, const std::string& file, ObjectSpec& o) {
   }
 }
 
+// A label image's labels as a surface of `edge`, said in the notes with its volumes.
+Mesh image_surface(const std::filesystem::path& path, ObjectSpec& o) {
+  const LabelImage image = read_nifti_labels(path, &o.mesh.file_notes);
+  LabelSurfaceReport r;
+  try {
+    Mesh surface = label_surface(image, o.mesh.labels, *o.mesh.fill_edge, &r);
+    o.mesh.file_notes.push_back(fmt::format(
+        "{}: labels {}: {} voxels, {:.2f} mL; their surface: {} triangles enclosing {:.2f} mL "
+        "({:+.2f} %), centroid ({:.2f}, {:.2f}, {:.2f}) mm",
+        path.string(), fmt::join(o.mesh.labels, ", "), r.voxels, r.labelled_volume * 1e6,
+        surface.cells.size(), r.surface_volume * 1e6,
+        100.0 * (r.surface_volume - r.labelled_volume) / r.labelled_volume, r.centroid[0] * 1e3,
+        r.centroid[1] * 1e3, r.centroid[2] * 1e3));
+    return surface;
+  } catch (const MeshError& e) {
+    throw MeshFileError(path.string(), 0, 0, e.what());
+  }
+}
+
 // A mesh file's path is relative to the scene file; its problems are reported where they
 // are in it, naming the object whose mesh it is.
 void read_mesh(const Scene& scene, ObjectSpec& o, std::vector<Diagnostic>& problems) {
   const std::filesystem::path path = scene.file.parent_path() / o.mesh.file;
   const io::Unit* unit = io::find_unit(o.mesh.units);
   try {
-    Mesh mesh = read_mesh_file(path, unit ? unit->divisor / unit->scale : 1.0, &o.mesh.file_notes);
+    Mesh mesh = is_nifti_path(path) ? image_surface(path, o)
+                                    : read_mesh_file(path, unit ? unit->divisor / unit->scale : 1.0,
+                                                     &o.mesh.file_notes);
     if (o.mesh.fill_tetra) mesh = fill(std::move(mesh), *o.mesh.fill_edge, path.string(), o);
     o.mesh.file_mesh = std::make_shared<const Mesh>(std::move(mesh));
   } catch (const MeshFileError& e) {
