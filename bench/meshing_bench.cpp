@@ -38,8 +38,8 @@ void BM_ProstateImageToVolume(benchmark::State& state) {
   size_t triangles = 0, tetrahedra = 0;
   for (auto _ : state) {
     const LabelImage image = read_nifti_labels(path);
-    const Mesh surface = label_surface(image, labels, edge);
-    const Mesh volume = fill_with_tetrahedra(surface, edge);
+    Mesh surface;
+    const Mesh volume = label_volume(image, labels, edge, nullptr, &surface);
     triangles = surface.cells.size(), tetrahedra = volume.cells.size();
     benchmark::DoNotOptimize(volume.points.data());
   }

@@ -43,7 +43,11 @@ Mesh image_surface(const Settings& s, double edge, const std::string& units) {
   std::vector<std::string> notes;
   const LabelImage image = read_nifti_labels(s.input, &notes);
   LabelSurfaceReport r;
-  Mesh surface = label_surface(image, s.labels, edge, &r);
+  Mesh surface, volume;
+  if (s.surface_only)
+    surface = label_surface(image, s.labels, edge, &r);
+  else
+    volume = label_volume(image, s.labels, edge, &r, &surface);
   for (const std::string& note : notes) std::cout << note << '\n';
   const Vec3 voxel = image.spacing() * 1e3, c = r.centroid * 1e3;
   const Vec3 lo = r.box[0] * 1e3, hi = r.box[1] * 1e3;
@@ -59,8 +63,10 @@ Mesh image_surface(const Settings& s, double edge, const std::string& units) {
   if (r.dropped_components > 0)
     std::cout << fmt::format("left out: {} smaller parts (islands or cavities), {:.3f} mL\n",
                              r.dropped_components, r.dropped_volume * 1e6);
+  if (r.cleanup_stage > 0)
+    std::cout << fmt::format("the surface is {} (coarsened and smoothed, it folded)\n",
+                             r.cleanup_stage == 1 ? "smoothed only" : "as cut from the grid");
   if (!s.surface_only) {
-    Mesh volume = fill_with_tetrahedra(surface, edge);
     const TetraQuality q = tetra_quality(volume);
     const double v = tetra_volume(volume);
     std::cout << fmt::format(

@@ -17,6 +17,15 @@
 namespace phymul {
 namespace {
 
+// The tetrahedra's quality, for the file's notes.
+std::string fill_note(const Mesh& volume, double edge, const std::string& file) {
+  const TetraQuality q = tetra_quality(volume);
+  return fmt::format(
+      "{}: filled with {} tetrahedra and {} points (edge at most {:g} mm inside): smallest "
+      "dihedral angle {:.1f} degrees, largest radius-edge ratio {:.2f}",
+      file, q.tetrahedra, volume.points.size(), edge * 1e3, q.min_dihedral_deg, q.max_radius_edge);
+}
+
 // `fill: tetra`: the closed surface read from the file, checked, filled with tetrahedra; their
 // quality goes to the file's notes.
 Mesh fill(Mesh surface, double edge, const std::string& file, ObjectSpec& o) {
@@ -27,24 +36,20 @@ Mesh fill(Mesh surface, double edge, const std::string& file, ObjectSpec& o) {
         fmt::format("'fill' needs a closed surface: {}", fmt::join(check.problems, "; ")));
   try {
     Mesh volume = fill_with_tetrahedra(surface, edge);
-    const TetraQuality q = tetra_quality(volume);
-    o.mesh.file_notes.push_back(fmt::format(
-        "{}: filled with {} tetrahedra and {} points (edge at most {:g} mm inside): smallest "
-        "dihedral angle {:.1f} degrees, largest radius-edge ratio {:.2f}",
-        file, q.tetrahedra, volume.points.size(), edge * 1e3, q.min_dihedral_deg,
-        q.max_radius_edge));
+    o.mesh.file_notes.push_back(fill_note(volume, edge, file));
     return volume;
   } catch (const MeshError& e) {
     throw MeshFileError(file, 0, 0, e.what());
   }
 }
 
-// A label image's labels as a surface of `edge`, said in the notes with its volumes.
-Mesh image_surface(const std::filesystem::path& path, ObjectSpec& o) {
+// A label image's labels as a surface of `edge` filled with tetrahedra, said in the notes.
+Mesh image_volume(const std::filesystem::path& path, ObjectSpec& o) {
   const LabelImage image = read_nifti_labels(path, &o.mesh.file_notes);
   LabelSurfaceReport r;
   try {
-    Mesh surface = label_surface(image, o.mesh.labels, *o.mesh.fill_edge, &r);
+    Mesh surface;
+    Mesh volume = label_volume(image, o.mesh.labels, *o.mesh.fill_edge, &r, &surface);
     o.mesh.file_notes.push_back(fmt::format(
         "{}: labels {}: {} voxels, {:.2f} mL; their surface: {} triangles enclosing {:.2f} mL "
         "({:+.2f} %), centroid ({:.2f}, {:.2f}, {:.2f}) mm",
@@ -52,7 +57,8 @@ Mesh image_surface(const std::filesystem::path& path, ObjectSpec& o) {
         surface.cells.size(), r.surface_volume * 1e6,
         100.0 * (r.surface_volume - r.labelled_volume) / r.labelled_volume, r.centroid[0] * 1e3,
         r.centroid[1] * 1e3, r.centroid[2] * 1e3));
-    return surface;
+    o.mesh.file_notes.push_back(fill_note(volume, *o.mesh.fill_edge, path.string()));
+    return volume;
   } catch (const MeshError& e) {
     throw MeshFileError(path.string(), 0, 0, e.what());
   }
@@ -64,9 +70,11 @@ void read_mesh(const Scene& scene, ObjectSpec& o, std::vector<Diagnostic>& probl
   const std::filesystem::path path = scene.file.parent_path() / o.mesh.file;
   const io::Unit* unit = io::find_unit(o.mesh.units);
   try {
-    Mesh mesh = is_nifti_path(path) ? image_surface(path, o)
-                                    : read_mesh_file(path, unit ? unit->divisor / unit->scale : 1.0,
-                                                     &o.mesh.file_notes);
+    if (is_nifti_path(path)) {  // a label image: its surface filled, as `phymul mesh` does
+      o.mesh.file_mesh = std::make_shared<const Mesh>(image_volume(path, o));
+      return;
+    }
+    Mesh mesh = read_mesh_file(path, unit ? unit->divisor / unit->scale : 1.0, &o.mesh.file_notes);
     if (o.mesh.fill_tetra) mesh = fill(std::move(mesh), *o.mesh.fill_edge, path.string(), o);
     o.mesh.file_mesh = std::make_shared<const Mesh>(std::move(mesh));
   } catch (const MeshFileError& e) {

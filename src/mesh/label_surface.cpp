@@ -13,6 +13,7 @@
 #include "mesh/marching_tetrahedra.hpp"
 #include "mesh/surface_check.hpp"
 #include "mesh/surface_smoothing.hpp"
+#include "phymul/meshing.hpp"
 
 namespace phymul {
 namespace {
@@ -203,6 +204,22 @@ void fill_report(const Mesh& m, const View& v, size_t voxels, LabelSurfaceReport
   r.box = bounding_box(m.points);
 }
 
+// Stage 0: coarsened to the edge and smoothed; 1: smoothed only; 2: the zero level set as
+// marching tetrahedra cut it. Each keeps the zero level set's volume (`mm`: the edge).
+constexpr int kStages = 3;
+Mesh clean_up(Mesh m, int stage, double mm) {
+  if (stage == 2) return m;
+  const double volume = enclosed_volume(m.points, boundary_triangles(m));
+  for (int round = 0; stage == 0 && round < 3; ++round) {  // flips free edges for collapses
+    detail::collapse_short_edges(m, kShortestEdge * mm, kLongestEdge * mm);
+    detail::flip_edges(m);
+    detail::taubin_smooth(m, 2);
+  }
+  detail::taubin_smooth(m, kTaubinIterations);
+  detail::restore_volume(m, volume);
+  return m;
+}
+
 }  // namespace
 
 std::map<std::int32_t, size_t> label_counts(const LabelImage& image) {
@@ -212,7 +229,7 @@ std::map<std::int32_t, size_t> label_counts(const LabelImage& image) {
 }
 
 Mesh label_surface(const LabelImage& image, std::span<const int> labels, double edge,
-                   LabelSurfaceReport* report) {
+                   LabelSurfaceReport* report, int first_stage) {
   if (!(edge > 0.0) || !std::isfinite(edge))
     throw MeshError(fmt::format("the surface's edge must be > 0 m (got {})", edge));
   if (labels.empty()) throw MeshError("no label chosen");
@@ -234,28 +251,45 @@ Mesh label_surface(const LabelImage& image, std::span<const int> labels, double 
         fmt::format("the labelled region is too small for an edge of {:g} mm: no "
                     "surface was found (choose a smaller edge)",
                     edge * 1e3));
-  // The zero level set's volume: coarsening and smoothing may not change it.
-  const double volume = enclosed_volume(part.mesh.points, boundary_triangles(part.mesh));
-  for (int round = 0; round < 3; ++round) {  // flips free edges for more collapses
-    detail::collapse_short_edges(part.mesh, kShortestEdge * edge * 1e3, kLongestEdge * edge * 1e3);
-    detail::flip_edges(part.mesh);
-    detail::taubin_smooth(part.mesh, 2);
+  // The first clean-up whose surface is embedded: thin parts (a voxel wide) may fold under
+  // coarsening or smoothing; the zero level set itself never intersects itself.
+  std::string problems;
+  for (int stage = std::clamp(first_stage, 0, kStages - 1); stage < kStages; ++stage) {
+    Mesh m = clean_up(part.mesh, stage, edge * 1e3);
+    to_physical(m, v, grid.start);
+    SurfaceCheck check = check_closed_surface(m);
+    if (check.problems.empty()) {
+      if (report) {
+        fill_report(m, v, voxels, *report);
+        report->grid_spacing = h * 1e-3;
+        report->cleanup_stage = stage;
+        report->dropped_components = part.dropped;
+        report->dropped_volume =
+            part.dropped_volume * 1e-9 * std::abs(image.axes.determinant()) / (v.s.prod() * 1e-9);
+      }
+      return m;
+    }
+    if (problems.empty()) problems = fmt::format("{}", fmt::join(check.problems, "; "));
   }
-  detail::taubin_smooth(part.mesh, kTaubinIterations);
-  detail::restore_volume(part.mesh, volume);
-  to_physical(part.mesh, v, grid.start);
-  SurfaceCheck check = check_closed_surface(part.mesh);
-  if (!check.problems.empty())
-    throw MeshError(fmt::format("the surface extracted from the labels is not a closed surface: {}",
-                                fmt::join(check.problems, "; ")));
-  if (report) {
-    fill_report(part.mesh, v, voxels, *report);
-    report->grid_spacing = h * 1e-3;
-    report->dropped_components = part.dropped;
-    report->dropped_volume =
-        part.dropped_volume * 1e-9 * std::abs(image.axes.determinant()) / (v.s.prod() * 1e-9);
+  throw MeshError(
+      fmt::format("the surface extracted from the labels is not a closed surface: {}", problems));
+}
+
+Mesh label_volume(const LabelImage& image, std::span<const int> labels, double edge,
+                  LabelSurfaceReport* report, Mesh* surface) {
+  LabelSurfaceReport r;
+  for (int stage = 0;; stage = r.cleanup_stage + 1) {
+    Mesh s = label_surface(image, labels, edge, &r, stage);
+    try {
+      Mesh volume = fill_with_tetrahedra(s, edge);
+      if (report) *report = r;
+      if (surface) *surface = std::move(s);
+      return volume;
+    } catch (const MeshError&) {
+      // Gmsh's test of touching triangles is stricter than ours: a less smoothed surface.
+      if (r.cleanup_stage + 1 >= kStages) throw;
+    }
   }
-  return part.mesh;
 }
 
 }  // namespace phymul
