@@ -33,7 +33,7 @@ void check_image(const phymul::LabelImage& im) {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string bytes(reinterpret_cast<const char*>(data), size);
   try {
-    const phymul::LabelImage image = phymul::parse_nifti_labels(bytes, "fuzz.nii");
+    const phymul::LabelImage image = phymul::parse_nifti_labels(bytes, "fuzz");
     check_image(image);
     if (image.labels.size() <= 4096) {
       const int labels[] = {1};
