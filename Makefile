@@ -53,7 +53,8 @@ clean:
 
 # Fuzzing (libFuzzer + ASan + UBSan, clang): the scene reader, the Truth Cube CSV reader, the
 # VTK, VTK XML (.vtu, .vtp), Gmsh and closed-surface (STL, OBJ, PLY) mesh readers, the
-# checkpoint reader and the CamiTK PML/LML readers, each run for FUZZ_SECONDS from a seed
+# checkpoint reader, the CamiTK PML/LML readers and the NIfTI label image reader (with the
+# surface of small images), each run for FUZZ_SECONDS from a seed
 # corpus; findings are written as build-fuzz/crash-*.
 FUZZ_DIR ?= build-fuzz
 FUZZ_SECONDS ?= 60
@@ -66,7 +67,7 @@ fuzz-build: deps-sanitize
 		-DPHYMUL_BENCH=OFF > $(FUZZ_DIR).configure.log 2>&1 || (cat $(FUZZ_DIR).configure.log; exit 1)
 	@cmake --build $(FUZZ_DIR) -j$(JOBS) --target $(patsubst %,%_fuzz,$(FUZZ_TARGETS))
 
-FUZZ_TARGETS := scene truthcube mesh_vtk mesh_vtkxml mesh_gmsh mesh_surface checkpoint pml
+FUZZ_TARGETS := scene truthcube mesh_vtk mesh_vtkxml mesh_gmsh mesh_surface checkpoint pml nifti
 FUZZ_RUN = ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	./$(1)_fuzz -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 \
 	-print_final_stats=1 corpus/$(1)
@@ -84,6 +85,7 @@ fuzz: fuzz-build
 		$(FUZZ_DIR)/corpus/mesh_surface/
 	@cp tests/data/camitk/* tests/data/bad_camitk/*.pml tests/data/bad_camitk/*.lml \
 		$(FUZZ_DIR)/corpus/pml/
+	@cp tests/data/bad_images/*.nii* tests/data/images/*.nii* $(FUZZ_DIR)/corpus/nifti/
 	cd $(FUZZ_DIR) && $(call FUZZ_RUN,scene)
 	cd $(FUZZ_DIR) && $(call FUZZ_RUN,truthcube)
 	cd $(FUZZ_DIR) && $(call FUZZ_RUN,mesh_vtk)
@@ -92,3 +94,4 @@ fuzz: fuzz-build
 	cd $(FUZZ_DIR) && $(call FUZZ_RUN,mesh_surface)
 	cd $(FUZZ_DIR) && $(call FUZZ_RUN,checkpoint)
 	cd $(FUZZ_DIR) && $(call FUZZ_RUN,pml)
+	cd $(FUZZ_DIR) && $(call FUZZ_RUN,nifti)

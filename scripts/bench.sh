@@ -41,6 +41,11 @@ OMP_NUM_THREADS=1 "$root/$build/bench/phymul_frame_bench" \
 OMP_NUM_THREADS=1 "$root/$build/bench/phymul_mesh_read_bench" \
   --benchmark_out="$root/bench/results_mesh_read.json" --benchmark_out_format=json \
   --benchmark_counters_tabular=true
+# Volume meshing on one core: a 20k-triangle surface filled, prostate_00 from its NIfTI file
+# to tetrahedra (bench/results_meshing.json).
+OMP_NUM_THREADS=1 "$root/$build/bench/phymul_meshing_bench" \
+  --benchmark_out="$root/bench/results_meshing.json" --benchmark_out_format=json \
+  --benchmark_counters_tabular=true
 "$root/$build/bench/phymul_memory" 40 | tee "$root/bench/memory.json"
 # The Python module: phymul.step's cost per call over the C++ step, and two threads stepping
 # two models at once (bench/results_python.json).

@@ -20,6 +20,7 @@ PUBLIC = {
     "phymul.hpp": "io",  # the umbrella header: the library, studies aside
     "mesh.hpp": "mesh",
     "meshing.hpp": "mesh",
+    "label_surface.hpp": "mesh",
     "schedule.hpp": "mesh",
     "fem.hpp": "fem",
     "scene.hpp": "model",
@@ -29,6 +30,7 @@ PUBLIC = {
     "simulation.hpp": "solver",
     "calibration.hpp": "solver",
     "mesh_io.hpp": "io",
+    "nifti.hpp": "io",
     "schema.hpp": "io",
     "vtk.hpp": "io",
     "results.hpp": "io",

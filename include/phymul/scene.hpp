@@ -106,6 +106,7 @@ struct MeshSpec {
   std::string file;                                  // instead of a generator
   std::string units = "m";                           // of the file's coordinates
   std::string component;            // a PML file: the component whose cells are the object's
+  std::vector<int> labels;          // a label image's labels that make the object
   bool fill_tetra = false;          // a closed surface file filled with tetrahedra
   std::optional<double> fill_edge;  // m, their largest edge inside (with fill_tetra)
   std::optional<double> remesh;     // m: the file's surface remeshed to this edge

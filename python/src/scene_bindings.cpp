@@ -294,7 +294,8 @@ void bind_object(py::module_& m) {
   py::class_<MeshSpec> mesh(m, "Mesh", "An object's `mesh` (generated or from a file).");
   mesh.def_readonly("generator", &MeshSpec::generator)
       .def_readonly("file", &MeshSpec::file)
-      .def_readonly("units", &MeshSpec::units);
+      .def_readonly("units", &MeshSpec::units)
+      .def_readonly("labels", &MeshSpec::labels);  // a label image's
   vector(mesh, "mesh", "size", &MeshSpec::size);
   vector(mesh, "mesh", "radii", &MeshSpec::radii);
   vector(mesh, "mesh", "center", &MeshSpec::center);

@@ -405,7 +405,10 @@ std::vector<Parameter> mesh_parameters() {
               "closed surface: STL (ASCII or binary), OBJ, PLY (ASCII or binary) or VTK XML "
               "PolyData (`.vtp`, its polygons), checked closed, manifold and free of crossing "
               "triangles, its orientation made outward. Or a CamiTK PML physical model (`.pml`, "
-              "docs/camitk.md), one of its components (`component`)."},
+              "docs/camitk.md), one of its components (`component`). Or a label image (a "
+              "segmentation): NIfTI-1, `.nii` or `.nii.gz`, with `labels` and `fill`; its "
+              "chosen labels become a smooth closed surface in the image's physical frame "
+              "(docs/anatomy.md), then tetrahedra."},
       {.section = "mesh",
        .name = "component",
        .kind = Kind::text,
@@ -414,6 +417,13 @@ std::vector<Parameter> mesh_parameters() {
               "multi) whose cells are the object's; its atoms become the nodes, every "
               "informative component a node set (of the atoms it shares with them; characters "
               "other than letters, digits, '_' and '-' become '_' in its name)."},
+      {.section = "mesh",
+       .name = "labels",
+       .kind = Kind::integers,
+       .range = closed(-2147483648.0, 2147483647.0),
+       .default_note = "required for a label image",
+       .doc = "A label image `file` (`.nii`, `.nii.gz`): the labels whose voxels make the object "
+              "(e.g. `[1, 2]`: a gland's two zones together)."},
       {.section = "mesh",
        .name = "units",
        .kind = Kind::choice,
@@ -433,7 +443,8 @@ std::vector<Parameter> mesh_parameters() {
        .dimension = Dimension::length,
        .range = gt(0),
        .when = {kFill},
-       .doc = "With `fill` (required there): the largest edge of the tetrahedra inside."},
+       .doc = "With `fill` (required there): the largest edge of the tetrahedra inside; for a "
+              "label image also the surface triangles' size."},
       {.section = "mesh",
        .name = "remesh",
        .kind = Kind::quantity,
@@ -1179,6 +1190,8 @@ std::string_view kind_name(Kind kind) {
       return "scalar schedule";
     case Kind::names:
       return "list of names";
+    case Kind::integers:
+      return "list of whole numbers";
     case Kind::list:
       return "list of maps";
     case Kind::map:

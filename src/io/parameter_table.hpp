@@ -19,6 +19,7 @@ enum class Kind {
   vector,           // [x, y, z] of quantities, each with its own optional unit
   integer,          // whole number
   integer_vector,   // [x, y, z] of whole numbers
+  integers,         // list of whole numbers (range: of each value)
   boolean,          // true | false
   choice,           // one of `choices`
   name,             // [A-Za-z0-9_-]+

@@ -17,6 +17,7 @@
 #include "io/parameter_table.hpp"
 #include "io/scene_interactions.hpp"
 #include "io/scene_reader.hpp"
+#include "phymul/nifti.hpp"
 #include "phymul/scene_io.hpp"
 
 namespace phymul {
@@ -189,6 +190,7 @@ class SceneBuilder {
   MeshSpec mesh(SectionReader& reader);
   void check_mesh_source(SectionReader& reader);
   MeshTransform mesh_transform(SectionReader& reader);
+  void check_label_image(SectionReader& reader, const MeshSpec& spec);
   MaterialSpec material(SectionReader& reader);
   void load(SectionReader& reader, Scene& scene);
   ConstraintSpec constraint(SectionReader& reader);
@@ -419,6 +421,7 @@ MeshSpec SceneBuilder::mesh(SectionReader& reader) {
   reader.read("file", spec.file);
   reader.read("units", spec.units);
   reader.read("component", spec.component);
+  reader.read("labels", spec.labels);
   spec.fill_tetra = reader.value_loc("fill").has_value();
   std::string fill;
   reader.read("fill", fill);
@@ -430,6 +433,7 @@ MeshSpec SceneBuilder::mesh(SectionReader& reader) {
   reader.read("remesh", spec.remesh);
   if (auto transform = reader.map("transform")) spec.transform = mesh_transform(*transform);
   check_mesh_source(reader);
+  check_label_image(reader, spec);
   reader.done();
   return spec;
 }
@@ -452,13 +456,42 @@ MeshTransform SceneBuilder::mesh_transform(SectionReader& reader) {
   return t;
 }
 
+// A label image needs its labels and its filling; a surface or mesh file takes no labels.
+void SceneBuilder::check_label_image(SectionReader& reader, const MeshSpec& spec) {
+  const auto file = reader.value_loc("file");
+  if (!file) return;
+  const bool image = is_nifti_path(spec.file);
+  if (!image) {
+    if (const auto at = reader.value_loc("labels"))
+      context_.error(*at, "'labels' applies to a label image file (.nii, .nii.gz) only");
+    return;
+  }
+  if (!reader.value_loc("labels"))
+    context_.error(*file,
+                   "a label image needs 'labels', the labels that make the object "
+                   "(e.g. labels: [1, 2])");
+  if (!spec.fill_tetra)
+    context_.error(*file,
+                   "a label image needs 'fill: tetra' and 'edge': its labels become a "
+                   "surface of that edge, filled with tetrahedra");
+  if (const auto at = reader.value_loc("units"))
+    context_.error(*at,
+                   "'units' does not apply to a label image: its header gives its frame's "
+                   "unit");
+  if (const auto at = reader.value_loc("remesh"))
+    context_.error(*at,
+                   "'remesh' does not apply to a label image: 'edge' sets its surface's "
+                   "triangles");
+}
+
 // A mesh from a file takes only `units`; the generators' keys would be silently ignored.
 void SceneBuilder::check_mesh_source(SectionReader& reader) {
   const bool from_file = reader.value_loc("file").has_value();
   for (const io::Parameter* p : io::section_parameters("mesh")) {
     if (p->name == "generator" || p->name == "transform") continue;  // one_of: names both
     const bool generator_key = p->name != "file" && p->name != "units" && p->name != "fill" &&
-                               p->name != "edge" && p->name != "remesh" && p->name != "component";
+                               p->name != "edge" && p->name != "remesh" && p->name != "component" &&
+                               p->name != "labels";
     if (from_file == generator_key)
       if (const auto at = reader.value_loc(p->name))
         context_.error(*at, from_file ? fmt::format("'{}' belongs to generated meshes; a mesh "

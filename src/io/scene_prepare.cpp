@@ -10,9 +10,11 @@
 #include "mesh/surface_check.hpp"
 #include "phymul/calibration.hpp"
 #include "phymul/camitk.hpp"
+#include "phymul/label_surface.hpp"
 #include "phymul/mesh_io.hpp"
 #include "phymul/meshing.hpp"
 #include "phymul/model.hpp"
+#include "phymul/nifti.hpp"
 #include "phymul/scene_io.hpp"
 
 namespace phymul {
@@ -25,6 +27,15 @@ Mesh read_pml_mesh(const std::filesystem::path& path, double divisor, MeshSpec& 
   return pml_object_mesh(pml, spec.component, &spec.atom_ids, path.string());
 }
 
+// The tetrahedra's quality, for the file's notes.
+std::string fill_note(const Mesh& volume, double edge, const std::string& file) {
+  const TetraQuality q = tetra_quality(volume);
+  return fmt::format(
+      "{}: filled with {} tetrahedra and {} points (edge at most {:g} mm inside): smallest "
+      "dihedral angle {:.1f} degrees, largest radius-edge ratio {:.2f}",
+      file, q.tetrahedra, volume.points.size(), edge * 1e3, q.min_dihedral_deg, q.max_radius_edge);
+}
+
 // `fill: tetra`: the closed surface read from the file, checked, filled with tetrahedra; their
 // quality goes to the file's notes.
 Mesh fill(Mesh surface, double edge, const std::string& file, ObjectSpec& o) {
@@ -35,12 +46,7 @@ Mesh fill(Mesh surface, double edge, const std::string& file, ObjectSpec& o) {
         fmt::format("'fill' needs a closed surface: {}", fmt::join(check.problems, "; ")));
   try {
     Mesh volume = fill_with_tetrahedra(surface, edge);
-    const TetraQuality q = tetra_quality(volume);
-    o.mesh.file_notes.push_back(fmt::format(
-        "{}: filled with {} tetrahedra and {} points (edge at most {:g} mm inside): smallest "
-        "dihedral angle {:.1f} degrees, largest radius-edge ratio {:.2f}",
-        file, q.tetrahedra, volume.points.size(), edge * 1e3, q.min_dihedral_deg,
-        q.max_radius_edge));
+    o.mesh.file_notes.push_back(fill_note(volume, edge, file));
     return volume;
   } catch (const MeshError& e) {
     throw MeshFileError(file, 0, 0, e.what());
@@ -78,6 +84,27 @@ Mesh remeshed(Mesh surface, double edge, const std::string& file, ObjectSpec& o)
   }
 }
 
+// A label image's labels as a surface of `edge` filled with tetrahedra, said in the notes.
+Mesh image_volume(const std::filesystem::path& path, ObjectSpec& o) {
+  const LabelImage image = read_nifti_labels(path, &o.mesh.file_notes);
+  LabelSurfaceReport r;
+  try {
+    Mesh surface;
+    Mesh volume = label_volume(image, o.mesh.labels, *o.mesh.fill_edge, &r, &surface);
+    o.mesh.file_notes.push_back(fmt::format(
+        "{}: labels {}: {} voxels, {:.2f} mL; their surface: {} triangles enclosing {:.2f} mL "
+        "({:+.2f} %), centroid ({:.2f}, {:.2f}, {:.2f}) mm",
+        path.string(), fmt::join(o.mesh.labels, ", "), r.voxels, r.labelled_volume * 1e6,
+        surface.cells.size(), r.surface_volume * 1e6,
+        100.0 * (r.surface_volume - r.labelled_volume) / r.labelled_volume, r.centroid[0] * 1e3,
+        r.centroid[1] * 1e3, r.centroid[2] * 1e3));
+    o.mesh.file_notes.push_back(fill_note(volume, *o.mesh.fill_edge, path.string()));
+    return volume;
+  } catch (const MeshError& e) {
+    throw MeshFileError(path.string(), 0, 0, e.what());
+  }
+}
+
 // A mesh file's path is relative to the scene file; its problems are reported where they
 // are in it, naming the object whose mesh it is.
 void read_mesh(const Scene& scene, ObjectSpec& o, std::vector<Diagnostic>& problems) {
@@ -97,6 +124,12 @@ void read_mesh(const Scene& scene, ObjectSpec& o, std::vector<Diagnostic>& probl
     return;
   }
   try {
+    if (is_nifti_path(path)) {  // a label image: its surface filled, as `phymul mesh` does
+      Mesh volume = image_volume(path, o);
+      place_mesh(volume, o.mesh.transform);
+      o.mesh.file_mesh = std::make_shared<const Mesh>(std::move(volume));
+      return;
+    }
     Mesh mesh = path.extension() == ".pml" ? read_pml_mesh(path, divisor, o.mesh)
                                            : read_mesh_file(path, divisor, &o.mesh.file_notes);
     place_mesh(mesh, o.mesh.transform);  // units, transform, remesh, fill: as the reference says

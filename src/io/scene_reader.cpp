@@ -555,6 +555,25 @@ bool SectionReader::read(std::string_view name, std::array<int, 3>& out) {
   return true;
 }
 
+bool SectionReader::read(std::string_view name, std::vector<int>& out) {
+  const auto value = lookup(name, {Kind::integers});
+  if (!value) return false;
+  if (!value->node.IsSequence() || value->node.size() == 0) {
+    const bool empty = value->node.IsSequence();
+    error(value->loc, fmt::format("'{}' expects a list of whole numbers such as [1, 2], got {}",
+                                  name, empty ? "an empty list" : describe_node(value->node)));
+    return false;
+  }
+  std::vector<int> items;
+  for (auto it = value->node.begin(); it != value->node.end(); ++it) {
+    const auto item = integer(*value, *it, fmt::format("'{}' entry {}", name, items.size()));
+    if (!item) return false;
+    items.push_back(int(*item));
+  }
+  out = std::move(items);
+  return true;
+}
+
 // ---- Node selectors
 
 bool SectionReader::read(std::string_view name, NodeSelector& out) {

@@ -72,6 +72,7 @@ class SectionReader {
   bool read(std::string_view name, long& out);
   bool read(std::string_view name, bool& out);
   bool read(std::string_view name, std::array<int, 3>& out);
+  bool read(std::string_view name, std::vector<int>& out);     // integers
   bool read(std::string_view name, std::array<bool, 3>& out);  // axes
   bool read(std::string_view name, std::string& out);          // name or choice
   bool read(std::string_view name, NodeSelector& out);

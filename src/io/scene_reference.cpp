@@ -55,7 +55,8 @@ std::string range_text(const Parameter& p) {
   if (p.kind == Kind::scalar_schedule) return "each value " + range;
   if (p.kind == Kind::list)
     return fmt::format("at least {} entr{}", *p.range.min, *p.range.min == 1 ? "y" : "ies");
-  if (p.kind == Kind::vector || p.kind == Kind::integer_vector) return "each " + range;
+  if (p.kind == Kind::vector || p.kind == Kind::integer_vector || p.kind == Kind::integers)
+    return "each " + range;
   return range;
 }
 

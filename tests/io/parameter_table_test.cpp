@@ -84,7 +84,7 @@ TEST(ParameterTableTest, RangesAreWellFormed) {
     const bool numeric = p.kind == Kind::quantity || p.kind == Kind::vector ||
                          p.kind == Kind::integer || p.kind == Kind::integer_vector ||
                          p.kind == Kind::list || p.kind == Kind::names ||
-                         p.kind == Kind::scalar_schedule;
+                         p.kind == Kind::scalar_schedule || p.kind == Kind::integers;
     if (!numeric) {
       EXPECT_TRUE(p.range.unbounded()) << p.name;
     }
