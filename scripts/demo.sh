@@ -28,6 +28,24 @@ xvfb-run -a "$py" "$root/scripts/render.py" "$out/biopsy.pvd" "$out/biopsy.png" 
   --rest --title "biopsy: last frame, |displacement|" --view side
 "$py" "$root/scripts/plot_needle.py" "$out/monitors.csv" "$out/biopsy_needle.png" \
   --title "biopsy: needle force against depth, target displacement"
+# Patient anatomy (docs/anatomy.md): a prostate meshed from its MRI segmentation, beside the
+# study's ellipsoid prostate under the same kind of probe; a bladder read from an STL surface.
+for name in prostate_mri bladder_from_stl; do
+  echo "== anatomy/$name"
+  out="$results/anatomy/$name"
+  rm -rf "$out"
+  "$root/$build/phymul" run "$root/examples/anatomy/$name.yaml" -o "$out"
+  xvfb-run -a "$py" "$root/scripts/render.py" "$out/$name.pvd" "$out/$name.png" \
+    --rest --title "$name: last frame, |displacement|" --view side
+done
+out="$results/anatomy/ellipsoid_50mL_rigid"
+rm -rf "$out"
+"$root/$build/phymul" run "$root/examples/prostate/50mL_rigid.yaml" -o "$out"
+xvfb-run -a "$py" "$root/scripts/render.py" "$out/50mL_rigid.pvd" "$out/50mL_rigid.png" \
+  --rest --title "ellipsoid prostate (the study's), 50 mL, rigid probe" --view side
+"$py" "$root/scripts/side_by_side.py" "$results/anatomy/prostate_mri_beside_ellipsoid.png" \
+  "A prostate from MRI (Medical Segmentation Decathlon, CC-BY-SA 4.0) beside the study's ellipsoid" \
+  "$results/anatomy/prostate_mri/prostate_mri.png" "$out/50mL_rigid.png"
 echo "== truthcube (the paper's section 3: beads measured in a compressed silicone cube)"
 "$root/$build/phymul" truthcube -o "$results/truthcube"
 echo "== prostate (the paper's section 4: an endorectal probe, bladder empty to full)"
@@ -65,4 +83,6 @@ echo "prostate.json, one scene (.yaml) and .pvd series per filling and probe, re
 echo "and the sweeps in $results/sweeps/<sweep>/: results.csv (a row per sample), summary.png"
 echo "(prostate_sensitivity: the prostate's deformation against its stiffness, a curve per"
 echo "bladder filling, a panel per probe force), samples/<id>/ (each sample's scene and results)"
+echo "and patient anatomy in $results/anatomy/: prostate_mri_beside_ellipsoid.png (a prostate"
+echo "meshed from an MRI segmentation beside the study's ellipsoid), <example>/<example>.png"
 echo "and the live view's page on the prostate scene: $results/live_view/prostate_50mL_rigid.png"
