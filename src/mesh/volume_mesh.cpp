@@ -120,9 +120,16 @@ Mesh fill_with_tetrahedra(const Mesh& surface, double edge) {
   } catch (...) {
     throw MeshError(fmt::format("Gmsh refused the surface: {}", last_gmsh_error()));
   }
+  // `edge` sizes the inside, not the surface's triangles: a fine surface grades out to it
+  // (a 20,480-triangle ellipsoid: 47k tetrahedra, not the 238k that sizes grown from the
+  // boundary give).
   gmsh::option::setNumber("Mesh.MeshSizeMax", edge);
+  gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", 0);
   gmsh::option::setNumber("Mesh.Algorithm3D", 1);  // Delaunay
+  // The optimiser takes every tetrahedron of quality below 0.5 (default 0.3): the grading's
+  // slivers go (smallest dihedral angle there 0.7 -> 9.4 degrees) for 0.6 s more.
   gmsh::option::setNumber("Mesh.Optimize", 1);
+  gmsh::option::setNumber("Mesh.OptimizeThreshold", 0.5);
   try {
     gmsh::model::mesh::generate(3);
   } catch (...) {
