@@ -451,7 +451,7 @@ std::vector<Parameter> mesh_parameters() {
        .dimension = Dimension::length,
        .range = gt(0),
        .doc = "A closed surface read from `file` remeshed to triangles of about this edge "
-              "(isotropic remeshing, docs/meshing-remesh.md), after `transform` and before "
+              "(isotropic remeshing, docs/anatomy.md), after `transform` and before "
               "`fill`; `phymul check` reports its quality and deviation. Too long an edge for "
               "the surface (fewer than 20 triangles) is refused with the range."},
       {.section = "mesh",
