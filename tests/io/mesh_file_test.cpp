@@ -10,6 +10,7 @@
 #include "phymul/model.hpp"
 #include "phymul/scene.hpp"
 #include "phymul/scene_io.hpp"
+#include "support/expected_messages.hpp"
 #include "support/process.hpp"
 
 namespace phymul {
@@ -213,13 +214,8 @@ TEST(MeshFile, EveryPrefixIsRefusedCleanlyOrReadsWhole) {
 // expected.txt as "file | message".
 TEST(MeshFile, EveryBadMeshReportsItsExpectedMessage) {
   const fs::path dir = testing::source_dir() / "tests/data/bad_meshes";
-  std::map<std::string, std::string> expected;
-  std::istringstream lines(read_text(dir / "expected.txt"));
-  for (std::string line; std::getline(lines, line);) {
-    const auto bar = line.find(" | ");
-    if (line.empty() || line[0] == '#' || bar == std::string::npos) continue;
-    expected[line.substr(0, bar)] = line.substr(bar + 3);
-  }
+  const std::map<std::string, std::string> expected =
+      testing::expected_messages(dir / "expected.txt");
   int seen = 0;
   for (const auto& e : fs::directory_iterator(dir)) {
     const std::string name = e.path().filename().string();
@@ -231,8 +227,8 @@ TEST(MeshFile, EveryBadMeshReportsItsExpectedMessage) {
       ADD_FAILURE() << name << " was read without complaint";
     } catch (const MeshFileError& error) {
       const std::string what = error.what();
-      EXPECT_NE(what.find(expected[name]), std::string::npos)
-          << name << "\n  expected: " << expected[name] << "\n  got:      " << what;
+      EXPECT_NE(what.find(expected.at(name)), std::string::npos)
+          << name << "\n  expected: " << expected.at(name) << "\n  got:      " << what;
       EXPECT_TRUE(what.starts_with(e.path().string())) << what;
     }
   }

@@ -8,6 +8,7 @@
 #include <map>
 #include <sstream>
 
+#include "support/expected_messages.hpp"
 #include "support/process.hpp"
 
 namespace phymul {
@@ -43,13 +44,8 @@ TEST(Nifti, TheProstateSegmentationReadsAsNibabelReadsIt) {
 // meshed as `phymul mesh FILE --labels 1 --edge '2 mm'` does.
 TEST(Nifti, EveryBadImageReportsItsExpectedMessage) {
   const fs::path dir = testing::source_dir() / "tests/data/bad_images";
-  std::map<std::string, std::string> expected;
-  std::istringstream lines(read_bytes(dir / "expected.txt"));
-  for (std::string line; std::getline(lines, line);) {
-    const auto bar = line.find(" | ");
-    if (line.empty() || line[0] == '#' || bar == std::string::npos) continue;
-    expected[line.substr(0, bar)] = line.substr(bar + 3);
-  }
+  const std::map<std::string, std::string> expected =
+      testing::expected_messages(dir / "expected.txt");
   int seen = 0;
   for (const auto& e : fs::directory_iterator(dir)) {
     const std::string name = e.path().filename().string();
@@ -63,8 +59,8 @@ TEST(Nifti, EveryBadImageReportsItsExpectedMessage) {
       ADD_FAILURE() << name << " was meshed without complaint";
     } catch (const std::runtime_error& error) {
       const std::string what = error.what();
-      EXPECT_NE(what.find(expected[name]), std::string::npos)
-          << name << "\n  expected: " << expected[name] << "\n  got:      " << what;
+      EXPECT_NE(what.find(expected.at(name)), std::string::npos)
+          << name << "\n  expected: " << expected.at(name) << "\n  got:      " << what;
     }
   }
   EXPECT_EQ(seen, int(expected.size()));
