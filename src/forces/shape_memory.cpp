@@ -237,10 +237,9 @@ namespace {
 double add_polar_forces(const ShapeMemory& m, std::span<const Vec3> rest, std::span<const Vec3> x,
                         std::span<Eigen::Quaterniond> rotations, std::span<Vec3> f,
                         std::span<double> blocks) {
-  // A memory whose plan changed after plan_polar_batches runs scalar, in node order.
-  if (!polar_batches_planned(m))
-    return run_coloured(m.plan, blocks,
-                        [&](int k) { return add_polar_node_forces(m, k, rest, x, rotations, f); });
+  // Compiling plans every polar memory's batches (plan_polar_batches), and a Model is not
+  // changed after: there is no unplanned path.
+  assert(polar_batches_planned(m));
   return run_coloured_blocks(m.plan, blocks, [&](int b) {
     double energy = 0.0;
     const int batched = m.batched_end[b], centred = m.centred_start[b],
