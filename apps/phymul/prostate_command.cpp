@@ -24,7 +24,7 @@ struct Settings {
   prostate::Options study;
   std::vector<double> fillings_ml{50, 100, 200, 300, 400};
   std::string probe = "both", model = "lsm", neck, dt_estimate, support = "lateral";
-  double force = 0, lift_mm = 0, young_kpa = 0, mass_scaling_us = -1;
+  double force = 0, lift_mm = 0, young_kpa = 0, mass_scaling_us = -1, stitch_radius_mm = 0;
   int bladder_subdivisions = 0;
   std::string output = "results/prostate", json_file, scenes;
   bool no_realtime = false, no_pictures = false, quiet = false, coarse = false;
@@ -83,6 +83,7 @@ int run(Settings& s) {
   if (s.bladder_subdivisions > 0) o.bladder_subdivisions = s.bladder_subdivisions;
   if (s.force > 0) o.probe_force = s.force;
   if (s.lift_mm > 0) o.probe_lift = s.lift_mm * 1e-3;
+  if (s.stitch_radius_mm > 0) o.stitch_radius = s.stitch_radius_mm * 1e-3;
   if (s.young_kpa > 0) o.prostate_young = s.young_kpa * 1e3;
   if (s.mass_scaling_us >= 0) o.mass_scaling_dt = s.mass_scaling_us * 1e-6;
   if (s.dt_estimate == "gershgorin") o.dt_estimate = DtEstimate::gershgorin;
@@ -191,6 +192,11 @@ Command add_prostate_command(CLI::App& parent) {
                   "node; 0: none)")
       ->check(CLI::Range(0.0, 1e6))
       ->capture_default_str();
+  app->add_option("--stitch-radius", s.stitch_radius_mm,
+                  fmt::format("--neck prostate: the prostate's base nodes this close to its axis "
+                              "are stitched to the bladder (mm) [{}]",
+                              o.stitch_radius * 1e3))
+      ->check(CLI::Range(1.0, 20.0));
   app->add_option("--neck", s.neck,
                   "which organ's nodes choose the neck stitches (the coarser one at the neck) "
                   "[prostate]")

@@ -437,6 +437,7 @@ _PROSTATE_PARAMETERS = {
     "coarse": ("--coarse-bladder", "flag", None, None),
     "support": ("--support", "choice", ("lateral", "bladder"), None),
     "support_stiffness": ("--support-stiffness", "stiffness", 1.0, (1e-3, 1e6)),
+    "stitch_radius": ("--stitch-radius", "length", 1e3, (1e-3, 0.02)),
 }
 _PROSTATE_DEFAULTS = {"filling": 50e-6, "probe": "pressure"}
 _PROSTATE_FIGURES = ("prostate_deformation_pct", "centre_displacement_mm", "centre_lift_mm",
@@ -1432,8 +1433,9 @@ def _summary_line(spec, out, results, kept, seconds, plot):
 # summary.png: each output against the varied parameters.
 
 def _numbers(rows, column):
+    """The column as numbers, or None (text, or a case that left it unset)."""
     try:
-        return [float(r[column]) for r in rows]
+        return [float(r.get(column)) for r in rows]
     except (TypeError, ValueError):
         return None
 

@@ -193,6 +193,8 @@ cases:
   - objects[cube].material.stiffness: 300 N/m
     simulation.dt: 10 ms
   - objects[cube].material.stiffness: 400 N/m
+  - objects[cube].material.stiffness: 250 N/m
+    simulation.damping: 2 1/s
 """
 
 
@@ -202,7 +204,10 @@ def test_a_sample_with_an_invalid_value_fails_alone(cluster, tmp_path):
                            cluster.scheduler_file)  # the scheduler named by its file
     assert code == 2, output  # ran, with failed samples
     rows = read_results(tmp_path / "out")
-    assert [r["status"] for r in rows] == ["ok", "failed", "failed", "ok"]
+    assert [r["status"] for r in rows] == ["ok", "failed", "failed", "ok", "ok"]
+    # A parameter that only some cases set: the summary still plots what varies.
+    assert float(rows[4]["simulation.damping"]) == 2.0 and rows[0]["simulation.damping"] == ""
+    assert (tmp_path / "out" / "summary.png").exists()
     assert rows[1]["error"] == (
         f"{sweep_file}:6:39: objects[cube].material.stiffness = -50 N/m: 'stiffness' must be "
         "> 0 N/m (got -50 N/m)")
