@@ -35,6 +35,7 @@ test-asan: deps-sanitize
 		> $(BUILD)-asan.configure.log 2>&1 || (cat $(BUILD)-asan.configure.log; exit 1)
 	@cmake --build $(BUILD)-asan -j$(JOBS)
 	@cd $(BUILD)-asan && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
+		LSAN_OPTIONS=suppressions=$(CURDIR)/scripts/lsan.supp \
 		UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 		ctest --output-on-failure -j$(JOBS) $(SANITIZE_TESTS)
 
@@ -68,7 +69,8 @@ fuzz-build: deps-sanitize
 	@cmake --build $(FUZZ_DIR) -j$(JOBS) --target $(patsubst %,%_fuzz,$(FUZZ_TARGETS))
 
 FUZZ_TARGETS := scene truthcube mesh_vtk mesh_vtkxml mesh_gmsh mesh_surface checkpoint pml nifti
-FUZZ_RUN = ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+FUZZ_RUN = ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS=suppressions=$(CURDIR)/scripts/lsan.supp \
+	UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	./$(1)_fuzz -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 \
 	-print_final_stats=1 corpus/$(1)
 
