@@ -213,27 +213,9 @@ TEST(MeshFile, EveryPrefixIsRefusedCleanlyOrReadsWhole) {
 // tests/data/bad_meshes: each file with its expected message (file:line:column: ...) in
 // expected.txt as "file | message".
 TEST(MeshFile, EveryBadMeshReportsItsExpectedMessage) {
-  const fs::path dir = testing::source_dir() / "tests/data/bad_meshes";
-  const std::map<std::string, std::string> expected =
-      testing::expected_messages(dir / "expected.txt");
-  int seen = 0;
-  for (const auto& e : fs::directory_iterator(dir)) {
-    const std::string name = e.path().filename().string();
-    if (name == "expected.txt") continue;
-    ++seen;
-    ASSERT_TRUE(expected.contains(name)) << name << " has no line in expected.txt";
-    try {
-      read_mesh_file(e.path());
-      ADD_FAILURE() << name << " was read without complaint";
-    } catch (const MeshFileError& error) {
-      const std::string what = error.what();
-      EXPECT_NE(what.find(expected.at(name)), std::string::npos)
-          << name << "\n  expected: " << expected.at(name) << "\n  got:      " << what;
-      EXPECT_TRUE(what.starts_with(e.path().string())) << what;
-    }
-  }
-  EXPECT_EQ(seen, int(expected.size()));
-  EXPECT_GE(seen, 10);
+  testing::expect_every_file_refused<MeshFileError>(
+      testing::source_dir() / "tests/data/bad_meshes", [](const fs::path& p) { read_mesh_file(p); },
+      10);
 }
 
 fs::path write(const TempDir& dir, const std::string& name, const std::string& text) {
