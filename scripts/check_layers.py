@@ -24,6 +24,7 @@ PUBLIC = {
     "schedule.hpp": "mesh",
     "fem.hpp": "fem",
     "scene.hpp": "model",
+    "scene_words.hpp": "model",
     "model.hpp": "model",
     "data.hpp": "model",
     "forces.hpp": "forces",

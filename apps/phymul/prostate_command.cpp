@@ -12,6 +12,7 @@
 #include "commands.hpp"
 #include "phymul/run.hpp"
 #include "phymul/scene_io.hpp"
+#include "phymul/scene_words.hpp"
 #include "phymul/simulation.hpp"
 #include "phymul/studies/prostate.hpp"
 #include "phymul/vtk.hpp"
@@ -86,8 +87,7 @@ int run(Settings& s) {
   if (s.stitch_radius_mm > 0) o.stitch_radius = s.stitch_radius_mm * 1e-3;
   if (s.young_kpa > 0) o.prostate_young = s.young_kpa * 1e3;
   if (s.mass_scaling_us >= 0) o.mass_scaling_dt = s.mass_scaling_us * 1e-6;
-  if (s.dt_estimate == "gershgorin") o.dt_estimate = DtEstimate::gershgorin;
-  if (s.dt_estimate == "power") o.dt_estimate = DtEstimate::power;
+  if (const auto estimate = scene_value<DtEstimate>(s.dt_estimate)) o.dt_estimate = *estimate;
   try {
     if (!s.scenes.empty()) {  // the study's scenes, in dynamics, for `phymul run`
       std::filesystem::create_directories(s.scenes);
@@ -208,7 +208,7 @@ Command add_prostate_command(CLI::App& parent) {
   app->add_option("--dt-estimate", s.dt_estimate,
                   "dynamic scenes: the stability limit dt_safety takes its share of "
                   "(simulation.dt_estimate) [power]")
-      ->check(CLI::IsMember({"gershgorin", "power"}));
+      ->check(CLI::IsMember(scene_words<DtEstimate>()));
   app->add_option("--mass-scaling", s.mass_scaling_us,
                   fmt::format("dynamic scenes: mass scaling to this stability limit (us; 0: none) "
                               "[{}]",

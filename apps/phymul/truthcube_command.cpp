@@ -7,6 +7,7 @@
 
 #include "commands.hpp"
 #include "phymul/installation.hpp"
+#include "phymul/scene_words.hpp"
 #include "phymul/studies/truthcube.hpp"
 #include "phymul/vtk.hpp"
 #include "pictures.hpp"
@@ -27,7 +28,7 @@ struct Settings {
 };
 
 int run(Settings& s) {
-  s.study.frame = s.frame == "frame" ? FrameMode::frame : FrameMode::polar;
+  s.study.frame = scene_value<FrameMode>(s.frame).value_or(FrameMode::polar);
   s.study.reaction = !s.no_reaction;
   s.study.volume_constraint = !s.no_volume;
   s.study.fem = !s.no_fem;
@@ -69,7 +70,7 @@ Command add_truthcube_command(CLI::App& parent) {
   app->add_option("-o,--output", s.output, "output directory")->capture_default_str();
   app->add_option("--json", s.json_file, "also write the table as JSON to this file");
   app->add_option("--frame", s.frame, "shape-memory frame")
-      ->check(CLI::IsMember({"polar", "frame"}))
+      ->check(CLI::IsMember(scene_words<FrameMode>()))
       ->capture_default_str();
   app->add_option("--solver", s.solver,
                   "shape-memory equilibria: FIRE relaxation or the implicit static solver")

@@ -21,6 +21,7 @@
 #include "phymul/run.hpp"
 #include "phymul/scene.hpp"
 #include "phymul/scene_io.hpp"
+#include "phymul/scene_words.hpp"
 #include "phymul/schedule.hpp"
 #include "phymul/schema.hpp"
 #include "phymul/simulation.hpp"

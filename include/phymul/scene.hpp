@@ -127,14 +127,15 @@ enum class ElasticModel { shape_memory, fem };
 
 struct MaterialSpec {
   ElasticModel model = ElasticModel::shape_memory;
-  double stiffness = 0.0;  // N/m, shape memory spring of each node
-  double young = 0.0;      // Pa, fem: compressible Neo-Hookean; shape memory: K calibrated from it
-  double poisson = 0.0;    // in (-1, 0.5): fem, or the FEM the shape memory's K is calibrated on
-  int calibration_axis = 2;  // shape memory with young: the compression axis (0 x, 1 y, 2 z)
-  SourceLoc stiffness_loc, young_loc, poisson_loc, calibration_axis_loc;  // line 0 when absent
-  double hourglass = 0.3;                // fem hexahedra (TLED): hourglass over the shear stiffness
-  fem::Law law = fem::Law::neo_hookean;  // fem
-  SourceLoc law_loc;                     // of `law`; line 0 when absent
+  std::optional<double> stiffness;  // N/m, shape memory spring of each node
+  // Pa, fem: compressible Neo-Hookean; shape memory: K calibrated from it (calibration.hpp)
+  std::optional<double> young;
+  std::optional<double> poisson;  // in (-1, 0.5): fem, or the FEM K is calibrated on
+  int calibration_axis = 2;       // shape memory with young: the compression axis (0 x, 1 y, 2 z)
+  SourceLoc young_loc;            // of `young`, for messages; line 0 when absent
+  double hourglass = 0.3;         // fem hexahedra (TLED): hourglass over the shear stiffness
+  fem::Law law = fem::Law::neo_hookean;                       // fem
+  SourceLoc law_loc;                                          // of `law`; line 0 when absent
   fem::HexaElement hexa = fem::HexaElement::mean_dilatation;  // fem hexahedra, Newton only
   SourceLoc hexa_loc;                                         // of `hexa`; line 0 when absent
   std::optional<double> density;                              // kg/m^3 (volumetric meshes)

@@ -161,21 +161,15 @@ def _shown(value):
 # Scene parameters: a path resolves to a field of a phymul.Scene (which checks units and ranges
 # exactly as a scene file does) and to the key of the scene's YAML that holds it.
 
+# What a sweep can vary, as the module binds it from the scene schema: each section's editable
+# fields of the kinds a sweep writes.
+_SWEEP_KINDS = ("quantity", "optional", "integer", "flag", "choice", "vector",
+                "scalar_schedule", "vector_schedule")
 _KINDS_BY_SECTION = {
-    "simulation": {"dt": "optional", "dt_safety": "quantity", "duration": "quantity",
-                   "gravity": "vector", "damping": "quantity", "tolerance": "quantity",
-                   "mass_scaling_dt": "optional", "load_steps": "integer", "mode": "choice",
-                   "integrator": "choice", "relaxation": "choice"},
-    "output": {"interval": "quantity", "vtk": "flag"},
-    "material": {"stiffness": "quantity", "young": "quantity", "poisson": "quantity",
-                 "density": "optional", "mass": "optional", "reaction": "flag"},
-    "mesh": {"size": "vector", "radii": "vector", "center": "vector", "radius": "quantity",
-             "length": "quantity", "subdivisions": "integer", "hexahedra": "integer",
-             "layers": "integer"},
-    "object": {"volume_constraint": "flag", "target_volume": "scalar_schedule"},
-    "obstacle": {"position": "vector", "radius": "quantity", "length": "quantity",
-                 "friction": "quantity", "motion": "vector_schedule"},
-}
+    section: {name: kind for name, kind in cls.editable_fields.items() if kind in _SWEEP_KINDS}
+    for section, cls in (("simulation", _phymul.Simulation), ("output", _phymul.Output),
+                         ("material", _phymul.Material), ("mesh", _phymul.Mesh),
+                         ("object", _phymul.Object), ("obstacle", _phymul.Obstacle))}
 # Python attribute -> (schema section, YAML key, YAML keys it replaces, kind).
 _LOAD_FIELDS = {
     "pressure": ("load", "pressure_schedule", ("pressure",), "scalar_schedule"),

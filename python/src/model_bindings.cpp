@@ -28,7 +28,7 @@ Busy::Busy(PyData& d) : d_(d) {
 Scene prepared_copy(const Scene& edited) {
   Scene scene = edited;
   for (ObjectSpec& o : scene.objects)
-    if (o.material.young == 0.0) o.calibration.reset();  // K was set directly
+    if (!o.material.young) o.calibration.reset();  // K was set directly
   prepare_scene(scene);
   return scene;
 }

@@ -3,9 +3,13 @@
 // set from Python is checked as the same value in a scene file would be.
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <string>
+#include <type_traits>
+#include <variant>
 #include <vector>
 
 #include "bindings.hpp"
@@ -15,14 +19,6 @@
 
 namespace phymul::python {
 namespace {
-
-std::string field_doc(const char* section, const char* name) {
-  const SceneField f = scene_field(section, name);
-  std::string doc = f.doc;
-  if (!f.unit.empty()) doc += " [" + f.unit + "]";
-  if (!f.range.empty()) doc += " range " + f.range;
-  return doc;
-}
 
 // A number (SI) or a quantity text ("4 mm"), checked against the field's range.
 double to_quantity(const char* section, const char* name, py::handle value) {
@@ -91,98 +87,172 @@ Schedule to_schedule(const char* section, const char* name, py::handle value, bo
   return s;
 }
 
-template <class T, class Get, class Set>
-void property(py::class_<T>& c, const char* python_name, Get get, Set set, std::string doc) {
-  c.def_property(python_name, get, set, doc.c_str());
-}
-
-template <class T>
-void quantity(py::class_<T>& c, const char* section, const char* name, double T::*member,
-              std::function<void(T&)> after = {}) {
-  property(
-      c, name, [member](const T& t) { return t.*member; },
-      [=](T& t, py::handle v) {
-        t.*member = to_quantity(section, name, v);
-        if (after) after(t);
-      },
-      field_doc(section, name));
-}
-
-template <class T>
-void optional_quantity(py::class_<T>& c, const char* section, const char* name,
-                       std::optional<double> T::*member) {
-  property(
-      c, name, [member](const T& t) { return t.*member; },
-      [=](T& t, py::handle v) {
-        t.*member =
-            v.is_none() ? std::nullopt : std::optional<double>(to_quantity(section, name, v));
-      },
-      field_doc(section, name) + " (None: absent)");
-}
-
-template <class T>
-void vector(py::class_<T>& c, const char* section, const char* name, Eigen::Vector3d T::*member) {
-  property(
-      c, name, [member](const T& t) { return tuple3(t.*member); },
-      [=](T& t, py::handle v) { t.*member = to_vector(section, name, v); },
-      field_doc(section, name));
-}
-
-template <class T>
-void integer(py::class_<T>& c, const char* section, const char* name, int T::*member) {
-  property(
-      c, name, [member](const T& t) { return t.*member; },
-      [=](T& t, py::handle v) { t.*member = to_integer(section, name, v); },
-      field_doc(section, name));
-}
-
-template <class T>
-void flag(py::class_<T>& c, const char* section, const char* name, bool T::*member) {
-  property(
-      c, name, [member](const T& t) { return t.*member; },
-      [=](T& t, py::handle v) { t.*member = to_flag(name, v); }, field_doc(section, name));
-}
-
-template <class T>
-void schedule(py::class_<T>& c, const char* python_name, const char* section, const char* name,
-              Schedule T::*member, bool scalar) {
-  property(
-      c, python_name, [=](const T& t) { return schedule_list(t.*member, scalar); },
-      [=](T& t, py::handle v) { t.*member = to_schedule(section, name, v, scalar); },
-      field_doc(section, name) + " As [(t, value), ...]; set a constant or a list of (t, value).");
-}
-
-// Choices as the scene file spells them.
-template <class Enum>
-struct Words {
-  std::vector<std::pair<const char*, Enum>> words;
-  const char* word(Enum e) const {
-    for (const auto& [w, v] : words)
-      if (v == e) return w;
-    return "?";
+std::string field_doc(const SceneField& f) {
+  std::string doc = f.doc;
+  if (!f.unit.empty()) doc += " [" + f.unit + "]";
+  if (!f.range.empty()) doc += " range " + f.range;
+  if (!f.choices.empty()) {
+    doc += " One of:";
+    for (const auto& word : f.choices) doc += " " + word;
+    doc += ".";
   }
-  Enum value(const char* name, const std::string& w) const {
-    std::string allowed;
-    for (const auto& [text, v] : words) {
-      if (w == text) return v;
-      allowed += (allowed.empty() ? "" : ", ") + std::string(text);
+  return doc;
+}
+
+// A word of the field's choices, or ValueError listing them.
+std::string to_word(const SceneField& f, py::handle value) {
+  if (!py::isinstance<py::str>(value))
+    throw py::type_error("'" + f.name + "' expects a word (str)");
+  const std::string word = value.cast<std::string>();
+  std::string allowed;
+  for (const auto& choice : f.choices) {
+    if (choice == word) return word;
+    allowed += (allowed.empty() ? "" : ", ") + choice;
+  }
+  throw py::value_error("'" + f.name + "' must be one of " + allowed + " (got '" + word + "')");
+}
+
+std::array<bool, 3> to_axes(const SceneField& f, py::handle value) {
+  const std::string text = py::isinstance<py::str>(value) ? value.cast<std::string>() : "";
+  std::array<bool, 3> axes{false, false, false};
+  for (const char c : text)
+    if (c >= 'x' && c <= 'z') axes[size_t(c - 'x')] = true;
+  if (text.empty() || text.find_first_not_of("xyz") != std::string::npos)
+    throw py::value_error("'" + f.name + "' expects a combination of x, y and z such as 'xz'");
+  return axes;
+}
+
+template <class Spec>
+using Getter = std::function<py::object(const Spec&)>;
+template <class Spec>
+using Setter = std::function<void(Spec&, py::handle)>;  // empty: read-only
+
+// Python's view of one member: (getter, setter); the setter checks as a scene file would.
+// Names, files and labels (what loading read) get no setter.
+template <class Spec, class Member>
+std::pair<Getter<Spec>, Setter<Spec>> accessors(const SceneField& f, const Member& m) {
+  if constexpr (std::is_same_v<Member, ChoiceMember<Spec>>) {
+    return {[m](const Spec& s) { return py::cast(std::string(m.get(s))); },
+            [m, f](Spec& s, py::handle v) { m.set(s, to_word(f, v)); }};
+  } else {
+    using T = std::decay_t<decltype(std::declval<Spec&>().*m)>;
+    const Getter<Spec> get = [m](const Spec& s) { return py::cast(s.*m); };
+    const std::string sec = f.section, name = f.name;
+    if constexpr (std::is_same_v<T, double>) {
+      return {get,
+              [=](Spec& s, py::handle v) { s.*m = to_quantity(sec.c_str(), name.c_str(), v); }};
+    } else if constexpr (std::is_same_v<T, std::optional<double>>) {
+      return {get, [=](Spec& s, py::handle v) {
+                s.*m = v.is_none()
+                           ? std::nullopt
+                           : std::optional<double>(to_quantity(sec.c_str(), name.c_str(), v));
+              }};
+    } else if constexpr (std::is_same_v<T, int> || std::is_same_v<T, long>) {
+      return {get,
+              [=](Spec& s, py::handle v) { s.*m = T(to_integer(sec.c_str(), name.c_str(), v)); }};
+    } else if constexpr (std::is_same_v<T, bool>) {
+      return {get, [=](Spec& s, py::handle v) { s.*m = to_flag(name.c_str(), v); }};
+    } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+      return {[m](const Spec& s) { return py::object(tuple3(s.*m)); },
+              [=](Spec& s, py::handle v) { s.*m = to_vector(sec.c_str(), name.c_str(), v); }};
+    } else if constexpr (std::is_same_v<T, std::array<int, 3>>) {
+      return {
+          [m](const Spec& s) {
+            return py::object(py::make_tuple((s.*m)[0], (s.*m)[1], (s.*m)[2]));
+          },
+          [=](Spec& s, py::handle v) {
+            if (py::isinstance<py::str>(v) || !py::isinstance<py::sequence>(v) || py::len(v) != 3)
+              throw py::type_error("'" + name + "' expects three whole numbers");
+            const auto items = py::reinterpret_borrow<py::sequence>(v);
+            for (size_t k = 0; k < 3; ++k)
+              (s.*m)[k] = to_integer(sec.c_str(), name.c_str(), items[k]);
+          }};
+    } else if constexpr (std::is_same_v<T, std::array<bool, 3>>) {
+      return {[m](const Spec& s) {
+                std::string axes;
+                for (int k = 0; k < 3; ++k)
+                  if ((s.*m)[size_t(k)]) axes += char('x' + k);
+                return py::object(py::str(axes));
+              },
+              [m, f](Spec& s, py::handle v) { s.*m = to_axes(f, v); }};
+    } else if constexpr (std::is_same_v<T, Schedule>) {
+      const bool scalar = f.kind == "quantity" || f.kind == "scalar_schedule";
+      return {
+          [m, scalar](const Spec& s) { return py::object(schedule_list(s.*m, scalar)); },
+          [=](Spec& s, py::handle v) { s.*m = to_schedule(sec.c_str(), name.c_str(), v, scalar); }};
+    } else {
+      return {get, {}};
     }
-    throw py::value_error("'" + std::string(name) + "' must be one of " + allowed + " (got '" + w +
-                          "')");
   }
-};
+}
 
-template <class T, class Enum>
-void choice(py::class_<T>& c, const char* section, const char* name, Enum T::*member,
-            Words<Enum> words, bool writable = true) {
-  const auto get = [member, words](const T& t) { return std::string(words.word(t.*member)); };
-  if (!writable) {
-    c.def_property_readonly(name, get, field_doc(section, name).c_str());
-    return;
+// A property's kind as the sweeps (phymul/sweep.py) name it.
+template <class Spec>
+std::string python_kind(const SceneField& f, const FieldMember<Spec>& member) {
+  if (std::holds_alternative<ChoiceMember<Spec>>(member)) return "choice";
+  if (std::holds_alternative<double Spec::*>(member)) return "quantity";
+  if (std::holds_alternative<std::optional<double> Spec::*>(member)) return "optional";
+  if (std::holds_alternative<int Spec::*>(member) || std::holds_alternative<long Spec::*>(member))
+    return "integer";
+  if (std::holds_alternative<bool Spec::*>(member)) return "flag";
+  if (std::holds_alternative<Eigen::Vector3d Spec::*>(member)) return "vector";
+  if (std::holds_alternative<Schedule Spec::*>(member))
+    return f.kind == "quantity" || f.kind == "scalar_schedule" ? "scalar_schedule"
+                                                               : "vector_schedule";
+  return f.kind;  // integer_vector, axes
+}
+
+template <class Spec>
+bool same_member(const FieldMember<Spec>& a, const FieldMember<Spec>& b) {
+  if (a.index() != b.index() || std::holds_alternative<ChoiceMember<Spec>>(a)) return false;
+  return std::visit(
+      [&](const auto& x) {
+        using M = std::decay_t<decltype(x)>;
+        if constexpr (std::is_same_v<M, ChoiceMember<Spec>>)
+          return false;
+        else
+          return x == std::get<M>(b);
+      },
+      a);
+}
+
+// One property per member of Spec that a scene field lands in, named after the first field
+// that does (`force` beside `schedule`: one schedule either sets). `after` runs after a set.
+template <class Spec>
+void bind_fields(py::class_<Spec>& c,
+                 const std::map<std::string, std::function<void(Spec&)>>& after = {}) {
+  std::vector<FieldMember<Spec>> bound;
+  py::dict editable;  // name -> kind of each property a program may set
+  for (const BoundField<Spec>& field : bound_fields<Spec>()) {
+    const SceneField& f = field.field;
+    const FieldMember<Spec>& member = field.member;
+    if (std::any_of(bound.begin(), bound.end(),
+                    [&](const auto& b) { return same_member<Spec>(b, member); }) ||
+        std::holds_alternative<NodeSelector Spec::*>(member))
+      continue;
+    bound.push_back(member);
+    auto [get, set] = std::visit([&](const auto& m) { return accessors<Spec>(f, m); }, member);
+    std::string doc = field_doc(f);
+    if (std::holds_alternative<Schedule Spec::*>(member))
+      doc += " As [(t, value), ...]; set a constant or a list of (t, value).";
+    if (std::holds_alternative<std::optional<double> Spec::*>(member)) doc += " (None: absent)";
+    const auto read = [get](const Spec& s) { return get(s); };
+    if (!f.editable || !set) {
+      c.def_property_readonly(f.name.c_str(), read, doc.c_str());
+      continue;
+    }
+    editable[py::str(f.name)] = python_kind(f, member);
+    std::function<void(Spec&)> then;
+    if (const auto hook = after.find(f.name); hook != after.end()) then = hook->second;
+    c.def_property(
+        f.name.c_str(), read,
+        [set, then](Spec& s, py::handle v) {
+          set(s, v);
+          if (then) then(s);
+        },
+        doc.c_str());
   }
-  property(
-      c, name, get, [=](T& t, const std::string& w) { t.*member = words.value(name, w); },
-      field_doc(section, name));
+  c.attr("editable_fields") = editable;
 }
 
 // A list of a scene's entries, indexed by position or by name (an object's, an obstacle's,
@@ -253,104 +323,40 @@ std::string target_key(const T& t) {
 
 void bind_simulation(py::module_& m) {
   py::class_<SimulationSpec> c(m, "Simulation", "The scene's `simulation` section.");
-  optional_quantity(c, "simulation", "dt", &SimulationSpec::dt);
-  quantity(c, "simulation", "dt_safety", &SimulationSpec::dt_safety);
-  quantity(c, "simulation", "duration", &SimulationSpec::duration);
-  vector(c, "simulation", "gravity", &SimulationSpec::gravity);
-  quantity(c, "simulation", "damping", &SimulationSpec::damping);
-  quantity(c, "simulation", "tolerance", &SimulationSpec::tolerance);
-  optional_quantity(c, "simulation", "mass_scaling_dt", &SimulationSpec::mass_scaling_dt);
-  integer(c, "simulation", "load_steps", &SimulationSpec::load_steps);
-  integer(c, "simulation", "implicit_iterations", &SimulationSpec::implicit_iterations);
-  quantity(c, "simulation", "implicit_tolerance", &SimulationSpec::implicit_tolerance);
-  choice(c, "simulation", "mode", &SimulationSpec::mode,
-         Words<SolveMode>{
-             {{"dynamic", SolveMode::dynamic}, {"static", SolveMode::static_equilibrium}}});
-  choice(c, "simulation", "integrator", &SimulationSpec::integrator,
-         Words<Integrator>{{{"verlet", Integrator::verlet},
-                            {"newton-cotes", Integrator::newton_cotes},
-                            {"implicit", Integrator::implicit}}});
-  choice(c, "simulation", "relaxation", &SimulationSpec::relaxation,
-         Words<Relaxation>{{{"fire", Relaxation::fire},
-                            {"kinetic", Relaxation::kinetic},
-                            {"viscous", Relaxation::viscous}}});
+  bind_fields(c);
 }
 
 void bind_object(py::module_& m) {
   py::class_<MaterialSpec> mat(m, "Material", "An object's `material`.");
   // Setting K directly drops a Young's modulus it would be calibrated from.
-  quantity<MaterialSpec>(mat, "material", "stiffness", &MaterialSpec::stiffness,
-                         [](MaterialSpec& s) { s.young = 0.0; });
-  quantity(mat, "material", "young", &MaterialSpec::young);
-  quantity(mat, "material", "poisson", &MaterialSpec::poisson);
-  optional_quantity(mat, "material", "density", &MaterialSpec::density);
-  optional_quantity(mat, "material", "mass", &MaterialSpec::mass);
-  flag(mat, "material", "reaction", &MaterialSpec::reaction);
-  choice(mat, "material", "model", &MaterialSpec::model,
-         Words<ElasticModel>{
-             {{"shape-memory", ElasticModel::shape_memory}, {"fem", ElasticModel::fem}}},
-         false);
+  bind_fields<MaterialSpec>(mat, {{"stiffness", [](MaterialSpec& s) { s.young.reset(); }}});
 
   py::class_<MeshSpec> mesh(m, "Mesh", "An object's `mesh` (generated or from a file).");
-  mesh.def_readonly("generator", &MeshSpec::generator)
-      .def_readonly("file", &MeshSpec::file)
-      .def_readonly("units", &MeshSpec::units)
-      .def_readonly("labels", &MeshSpec::labels);  // a label image's
-  vector(mesh, "mesh", "size", &MeshSpec::size);
-  vector(mesh, "mesh", "radii", &MeshSpec::radii);
-  vector(mesh, "mesh", "center", &MeshSpec::center);
-  quantity(mesh, "mesh", "radius", &MeshSpec::radius);
-  quantity(mesh, "mesh", "length", &MeshSpec::length);
-  integer(mesh, "mesh", "subdivisions", &MeshSpec::subdivisions);
-  integer(mesh, "mesh", "hexahedra", &MeshSpec::hexahedra);
-  integer(mesh, "mesh", "layers", &MeshSpec::layers);
+  bind_fields(mesh);
 
   py::class_<ObjectSpec> o(m, "Object", "An entry of the scene's `objects`.");
-  o.def_readonly("name", &ObjectSpec::name)
-      .def_property_readonly("type",
-                             [](const ObjectSpec& s) {
-                               return Words<ObjectType>{{{"elastic", ObjectType::elastic},
-                                                         {"rigid", ObjectType::rigid},
-                                                         {"active", ObjectType::active}}}
-                                   .word(s.type);
-                             })
-      .def_property_readonly(
-          "material", [](ObjectSpec& s) -> MaterialSpec& { return s.material; },
-          py::return_value_policy::reference_internal)
+  o.def_property_readonly(
+       "material", [](ObjectSpec& s) -> MaterialSpec& { return s.material; },
+       py::return_value_policy::reference_internal)
       .def_property_readonly(
           "mesh", [](ObjectSpec& s) -> MeshSpec& { return s.mesh; },
           py::return_value_policy::reference_internal);
-  flag(o, "object", "volume_constraint", &ObjectSpec::volume_constraint);
-  schedule(o, "target_volume", "object", "target_volume", &ObjectSpec::target_volume, true);
+  bind_fields(o);
 }
 
 void bind_interactions(py::module_& m) {
   py::class_<LoadSpec> load(m, "Load", "A nodal force of the scene's `loads`.");
-  load.def_readonly("object", &LoadSpec::object);
-  schedule(load, "force", "load", "schedule", &LoadSpec::force, false);
-
+  bind_fields(load);
   py::class_<PressureSpec> pressure(m, "Pressure", "A pressure of the scene's `loads`.");
   pressure.def_readonly("object", &PressureSpec::object);
-  schedule(pressure, "pressure", "load", "pressure_schedule", &PressureSpec::pressure, true);
-
+  bind_fields(pressure);
   py::class_<ConstraintSpec> constraint(m, "Constraint", "An entry of `constraints`.");
-  constraint.def_readonly("object", &ConstraintSpec::object);
-  schedule(constraint, "displacement", "constraint", "schedule", &ConstraintSpec::displacement,
-           false);
-  quantity(constraint, "constraint", "stiffness", &ConstraintSpec::stiffness);
-
+  bind_fields(constraint);
   py::class_<ObstacleSpec> obstacle(m, "Obstacle", "An entry of the scene's `obstacles`.");
-  obstacle.def_readonly("name", &ObstacleSpec::name)
-      .def_readonly("objects", &ObstacleSpec::objects);
-  vector(obstacle, "obstacle", "position", &ObstacleSpec::position);
-  quantity(obstacle, "obstacle", "radius", &ObstacleSpec::radius);
-  quantity(obstacle, "obstacle", "length", &ObstacleSpec::length);
-  quantity(obstacle, "obstacle", "friction", &ObstacleSpec::friction);
-  schedule(obstacle, "motion", "obstacle", "motion", &ObstacleSpec::motion, false);
-
+  obstacle.def_readonly("objects", &ObstacleSpec::objects);
+  bind_fields(obstacle);
   py::class_<OutputSpec> output(m, "Output", "The scene's `output` section.");
-  quantity(output, "output", "interval", &OutputSpec::interval);
-  flag(output, "output", "vtk", &OutputSpec::vtk);
+  bind_fields(output);
 }
 
 }  // namespace
@@ -418,11 +424,16 @@ void bind_scene(py::module_& m) {
         d["section"] = f.section;
         d["name"] = f.name;
         d["unit"] = f.unit;
+        d["kind"] = f.kind;
         d["range"] = f.range;
+        d["choices"] = f.choices;
         d["doc"] = f.doc;
+        d["editable"] = f.editable;
         return d;
       },
-      py::arg("section"), py::arg("name"), "A scene field's unit, range and documentation.");
+      py::arg("section"), py::arg("name"),
+      "A scene field's kind, unit, range, choices and documentation, and whether a program may "
+      "set it.");
 }
 
 }  // namespace phymul::python

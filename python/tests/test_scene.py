@@ -54,6 +54,40 @@ def test_edits_out_of_range_or_of_the_wrong_type_are_refused_with_the_readers_me
         phymul.scene_field("material", "stifness")
 
 
+# Each class of the module and the schema section its properties come from.
+SECTIONS = {"Simulation": "simulation", "Output": "output", "Material": "material",
+            "Mesh": "mesh", "Object": "object", "Obstacle": "obstacle", "Load": "load",
+            "Pressure": "load", "Constraint": "constraint"}
+
+
+def test_every_editable_property_is_a_schema_field_and_choices_read_back_as_written():
+    scene = phymul.load_scene(str(EXAMPLES / "prostate" / "50mL_rigid.yaml"))
+    holders = {"Simulation": scene.simulation, "Output": scene.output,
+               "Material": scene.objects[0].material, "Mesh": scene.objects[0].mesh,
+               "Object": scene.objects[0], "Obstacle": scene.obstacles[0]}
+    seen = 0
+    for name, section in SECTIONS.items():
+        cls = getattr(phymul._phymul, name)
+        for field, kind in cls.editable_fields.items():
+            schema = phymul.scene_field(section, field)
+            assert schema["doc"] in getattr(cls, field).__doc__
+            seen += 1
+            if kind != "choice" or name not in holders:
+                continue
+            for word in schema["choices"]:  # each word maps to its value and back
+                setattr(holders[name], field, word)
+                assert getattr(holders[name], field) == word
+    assert seen > 50
+    sim = scene.simulation
+    sim.integrator = "newton-cotes"
+    assert sim.integrator == "newton-cotes"
+    with pytest.raises(ValueError, match="'integrator' must be one of verlet, newton-cotes, "
+                                         "implicit"):
+        sim.integrator = "rk4"
+    with pytest.raises(AttributeError):
+        scene.objects[0].mesh.generator = "box"  # what loading read stays as read
+
+
 def test_a_bad_scene_raises_scene_error_with_the_lines_of_phymul_check():
     bad = SOURCE / "tests" / "data" / "bad_scenes"
     files = sorted(bad.glob("*.yaml"))

@@ -392,7 +392,8 @@ def test_sweep_file_errors_name_file_line_column_and_what_is_allowed(tmp_path):
         "got 'kg'",
         f"{f}:10:11: unknown parameter path 'objects[cube].material.stifness': 'stifness' is "
         "not a field of an object's material you can vary (known: stiffness, young, poisson, "
-        "density, mass, reaction); did you mean 'stiffness'?",
+        "calibration_axis, hourglass, law, hexa, density, mass, frame, reaction); did you mean "
+        "'stiffness'?",
         f"{f}:13:14: 'volume_cub_m3' is not a column of this scene's monitors.csv (columns: "
         "time_s, kinetic_energy_J, shape_memory_energy_J, max_residual_force_N, "
         "volume_cube_m3); did you mean 'volume_cube_m3'?",

@@ -9,6 +9,7 @@
 #include <string_view>
 #include <vector>
 
+#include "io/field_landing.hpp"
 #include "io/units.hpp"
 #include "model/closest_match.hpp"
 
@@ -58,8 +59,10 @@ struct Parameter {
   Dimension dimension = Dimension::none;
   Range range{};
   std::vector<std::string_view> choices{};
-  std::string_view default_value{};  // YAML text used when the key is absent; "" = none
-  std::string_view default_note{};   // reference text when absence means something else
+  // YAML text used when the key is absent; "" = none. A field that `lands` in a Spec takes
+  // its Spec's default (the table fills it in); only fields read by hand give it here.
+  std::string default_value{};
+  std::string_view default_note{};  // reference text when absence means something else
   bool required = false;
   std::string_view keyword{};     // a word accepted instead of a value ("auto")
   std::vector<Condition> when{};  // all must hold for the field to exist
@@ -67,6 +70,8 @@ struct Parameter {
   std::string_view child{};       // map and list: the section of the content
   bool uniform = false;           // vector: a single value stands for [v, v, v]
   std::string_view doc{};
+  Landing lands{};       // where the value lands in the Scene (read_fields); empty: by hand
+  bool editable = true;  // SceneField::editable: false when only a scene file sets it
 };
 
 struct Section {

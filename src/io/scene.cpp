@@ -199,11 +199,17 @@ class SceneBuilder {
   void elastic_material(const MaterialSpec& material);
   FibreSpec fibres(SectionReader& reader);
   OutputSpec output(SectionReader& reader);
-  void refer(SectionReader& reader, std::string& object);
+  void refer(SectionReader& reader, std::string_view key, const std::string& object);
   void check_names();
   void check_references();
 
+  // Where the current object's material gives these, valid or not: what else it then needs.
+  struct MaterialGiven {
+    std::optional<SourceLoc> stiffness, young, poisson, calibration_axis;
+  };
+
   SceneContext& context_;
+  MaterialGiven material_given_;
   bool material_model_known_ = true;  // the last material's `model` was absent or valid
   std::vector<Named> names_;
   std::vector<Named> references_;
@@ -242,34 +248,8 @@ Scene SceneBuilder::build(const YAML::Node& root, const std::string& file) {
 SimulationSpec SceneBuilder::simulation(SectionReader& reader) {
   SimulationSpec spec;
   spec.loc = reader.loc();
-  reader.read("dt", spec.dt);
-  reader.read("dt_safety", spec.dt_safety);
-  reader.read("dt_estimate", spec.dt_estimate,
-              {{"gershgorin", DtEstimate::gershgorin}, {"power", DtEstimate::power}});
-  reader.read("mass_scaling_dt", spec.mass_scaling_dt);
-  reader.read("duration", spec.duration);
-  reader.read("integrator", spec.integrator,
-              {{"verlet", Integrator::verlet},
-               {"newton-cotes", Integrator::newton_cotes},
-               {"implicit", Integrator::implicit}});
+  reader.read_fields(spec);
   spec.integrator_loc = reader.value_loc("integrator").value_or(SourceLoc{});
-  reader.read("implicit_iterations", spec.implicit_iterations);
-  reader.read("implicit_tolerance", spec.implicit_tolerance);
-  reader.read("mode", spec.mode,
-              {{"dynamic", SolveMode::dynamic}, {"static", SolveMode::static_equilibrium}});
-  reader.read("gravity", spec.gravity);
-  reader.read("damping", spec.damping);
-  reader.read("tolerance", spec.tolerance);
-  reader.read("max_iterations", spec.max_iterations);
-  reader.read("load_steps", spec.load_steps);
-  reader.read("relaxation", spec.relaxation,
-              {{"fire", Relaxation::fire},
-               {"kinetic", Relaxation::kinetic},
-               {"viscous", Relaxation::viscous}});
-  reader.read("solver", spec.solver,
-              {{"relaxation", StaticSolver::relaxation},
-               {"newton", StaticSolver::newton},
-               {"implicit", StaticSolver::implicit}});
   spec.solver_loc = reader.value_loc("solver").value_or(SourceLoc{});
   reader.done();
   return spec;
@@ -278,12 +258,12 @@ SimulationSpec SceneBuilder::simulation(SectionReader& reader) {
 ObjectSpec SceneBuilder::object(SectionReader& reader) {
   ObjectSpec spec;
   spec.loc = reader.loc();
-  if (reader.read("name", spec.name))
+  reader.read_fields(spec);
+  if (reader.given("name"))
     names_.push_back({spec.name, *reader.value_loc("name"), reader.where()});
   if (auto mesh_reader = reader.map("mesh")) spec.mesh = mesh(*mesh_reader);
+  material_given_ = {};
   if (auto material_reader = reader.map("material")) spec.material = material(*material_reader);
-  reader.read("volume_constraint", spec.volume_constraint);
-  reader.read_scalar("target_volume", spec.target_volume);
   object_kind(reader, spec);
   reader.done();
   return spec;
@@ -291,28 +271,24 @@ ObjectSpec SceneBuilder::object(SectionReader& reader) {
 
 // What the object's type adds (motion, fibres) and the fields it refuses or needs.
 void SceneBuilder::object_kind(SectionReader& reader, ObjectSpec& spec) {
-  const bool has_type = reader.read("type", spec.type,
-                                    {{"elastic", ObjectType::elastic},
-                                     {"rigid", ObjectType::rigid},
-                                     {"active", ObjectType::active}});
+  const bool has_type = !reader.value_loc("type") || reader.given("type");  // absent: elastic
   const bool has_motion = reader.value_loc("motion").has_value();
   if (auto motion = reader.map("motion"); motion && has_motion) {
     MotionSpec m;
     m.loc = motion->loc();
-    motion->read("translation", m.translation);
-    motion->read("rotation", m.rotation);
+    motion->read_fields(m);
     motion->done();
     spec.motion = std::move(m);
   }
   if (auto fibre_reader = reader.map("fibres")) spec.fibres = fibres(*fibre_reader);
   if (!has_type) return;
   if (spec.type == ObjectType::rigid) {
-    if (spec.material.stiffness_loc.line > 0)
-      context_.error(spec.material.stiffness_loc,
+    if (const auto& at = material_given_.stiffness)
+      context_.error(*at,
                      "'stiffness' applies only to elastic and active objects "
                      "(this object is rigid)");
-    if (spec.material.young_loc.line > 0)
-      context_.error(spec.material.young_loc,
+    if (const auto& at = material_given_.young)
+      context_.error(*at,
                      "'young' applies only to elastic and active objects (this object is rigid)");
     if (spec.volume_constraint)
       context_.error(reader.value_loc("volume_constraint").value_or(reader.loc()),
@@ -326,29 +302,29 @@ void SceneBuilder::object_kind(SectionReader& reader, ObjectSpec& spec) {
 // Which of stiffness, young and poisson an elastic material needs: finite elements take E
 // and nu; shape memory takes K, or E and nu to calibrate K on.
 void SceneBuilder::elastic_material(const MaterialSpec& m) {
-  const auto given = [](const SourceLoc& loc) { return loc.line > 0; };
+  const MaterialGiven& given = material_given_;
   if (m.model == ElasticModel::fem) {
-    for (auto [key, loc] : {std::pair{"young", m.young_loc}, {"poisson", m.poisson_loc}})
-      if (!given(loc)) context_.error(m.loc, fmt::format("'{}' is required in 'material'", key));
+    for (auto [key, at] : {std::pair{"young", given.young}, {"poisson", given.poisson}})
+      if (!at) context_.error(m.loc, fmt::format("'{}' is required in 'material'", key));
     return;
   }
-  if (given(m.stiffness_loc) && given(m.young_loc))
-    context_.error(m.young_loc,
+  if (given.stiffness && given.young)
+    context_.error(*given.young,
                    "give only one of 'stiffness' (K) or 'young' (K calibrated from it) in "
                    "'material'");
-  else if (!given(m.stiffness_loc) && !given(m.young_loc))
+  else if (!given.stiffness && !given.young)
     context_.error(m.loc,
                    "'stiffness' is required in 'material' (or 'young' and 'poisson', to "
                    "calibrate it against finite elements)");
-  if (given(m.young_loc) && !given(m.poisson_loc))
+  if (given.young && !given.poisson)
     context_.error(m.loc,
                    "'poisson' is required with 'young' in 'material' (the finite elements K is "
                    "calibrated on)");
-  if (!given(m.young_loc))
-    for (auto [key, loc] :
-         {std::pair{"poisson", m.poisson_loc}, {"calibration_axis", m.calibration_axis_loc}})
-      if (given(loc))
-        context_.error(loc, fmt::format("'{}' applies to a shape-memory material only with "
+  if (!given.young)
+    for (auto [key, at] :
+         {std::pair{"poisson", given.poisson}, {"calibration_axis", given.calibration_axis}})
+      if (at)
+        context_.error(*at, fmt::format("'{}' applies to a shape-memory material only with "
                                         "'young' (K calibrated from it)",
                                         key));
 }
@@ -359,8 +335,7 @@ FibreSpec SceneBuilder::fibres(SectionReader& reader) {
   if (reader.read("direction", spec.direction) && spec.direction.cwiseAbs().maxCoeff() == 0.0)
     context_.error(reader.value_loc("direction").value_or(reader.loc()),
                    "'direction' must be a non-zero vector (got [0, 0, 0])");
-  reader.read("max_contraction", spec.max_contraction);
-  reader.read("stiffness", spec.stiffness);
+  reader.read_fields(spec);
   Schedule activation;
   bool ok = true;
   reader.items("activation", [&](SectionReader& event) {
@@ -390,12 +365,9 @@ FibreSpec SceneBuilder::fibres(SectionReader& reader) {
 LinkSpec SceneBuilder::link(SectionReader& reader) {
   LinkSpec spec;
   spec.loc = reader.loc();
-  refer(reader, spec.object);
-  if (reader.read("with", spec.with))
-    references_.push_back({spec.with, *reader.value_loc("with"), reader.where()});
-  reader.read("nodes", spec.nodes);
-  reader.read("with_nodes", spec.with_nodes);
-  reader.read("tolerance", spec.tolerance);
+  reader.read_fields(spec);
+  refer(reader, "object", spec.object);
+  refer(reader, "with", spec.with);
   reader.done();
   return spec;
 }
@@ -403,34 +375,13 @@ LinkSpec SceneBuilder::link(SectionReader& reader) {
 MeshSpec SceneBuilder::mesh(SectionReader& reader) {
   MeshSpec spec;
   spec.loc = reader.loc();
-  reader.read("generator", spec.generator);
-  reader.read("element", spec.element, {{"hexa", CellType::hexa}, {"tetra", CellType::tetra}});
-  reader.read("surface", spec.surface);
-  reader.read("size", spec.size);
-  reader.read("cells", spec.cells);
-  reader.read("radii", spec.radii);
-  reader.read("subdivisions", spec.subdivisions);
-  reader.read("layers", spec.layers);
-  reader.read("hexahedra", spec.hexahedra);
-  reader.read("radius", spec.radius);
-  reader.read("length", spec.length);
-  reader.read("around", spec.around);
-  reader.read("along", spec.along);
-  reader.read("rings", spec.rings);
-  reader.read("center", spec.center);
-  reader.read("file", spec.file);
-  reader.read("units", spec.units);
-  reader.read("component", spec.component);
-  reader.read("labels", spec.labels);
+  reader.read_fields(spec);
   spec.fill_tetra = reader.value_loc("fill").has_value();
   std::string fill;
   reader.read("fill", fill);
-  double edge = 0.0;
-  if (reader.read("edge", edge)) spec.fill_edge = edge;
   if (spec.fill_tetra && !reader.value_loc("edge"))
     context_.error(*reader.value_loc("fill"),
                    "'fill' needs 'edge', the largest edge of the tetrahedra (a length)");
-  reader.read("remesh", spec.remesh);
   if (auto transform = reader.map("transform")) spec.transform = mesh_transform(*transform);
   check_mesh_source(reader);
   check_label_image(reader, spec);
@@ -440,8 +391,7 @@ MeshSpec SceneBuilder::mesh(SectionReader& reader) {
 
 MeshTransform SceneBuilder::mesh_transform(SectionReader& reader) {
   MeshTransform t;
-  reader.read("scale", t.scale);
-  reader.read("translate", t.translate);
+  reader.read_fields(t);
   if (auto rotate = reader.map("rotate")) {
     Eigen::Vector3d axis = t.axis;
     if (rotate->read("axis", axis) && axis.cwiseAbs().maxCoeff() == 0.0)
@@ -449,7 +399,7 @@ MeshTransform SceneBuilder::mesh_transform(SectionReader& reader) {
                      "'axis' of 'rotate' must be a non-zero vector (got [0, 0, 0])");
     else
       t.axis = axis.stableNormalized();
-    rotate->read("angle", t.angle);
+    rotate->read_fields(t);
     rotate->done();
   }
   reader.done();
@@ -507,39 +457,21 @@ void SceneBuilder::check_mesh_source(SectionReader& reader) {
 MaterialSpec SceneBuilder::material(SectionReader& reader) {
   MaterialSpec spec;
   spec.loc = reader.loc();
-  const bool model_given = reader.value_loc("model").has_value();
-  const bool model_read =
-      reader.read("model", spec.model,
-                  {{"shape-memory", ElasticModel::shape_memory}, {"fem", ElasticModel::fem}});
-  material_model_known_ = !model_given || model_read;  // an invalid one requires nothing
-  reader.read("stiffness", spec.stiffness);
-  reader.read("young", spec.young);
-  reader.read("poisson", spec.poisson);
-  reader.read("calibration_axis", spec.calibration_axis, {{"x", 0}, {"y", 1}, {"z", 2}});
-  for (auto [key, loc] : {std::pair{"stiffness", &spec.stiffness_loc},
-                          {"young", &spec.young_loc},
-                          {"poisson", &spec.poisson_loc},
-                          {"calibration_axis", &spec.calibration_axis_loc}})
-    *loc = reader.value_loc(key).value_or(SourceLoc{});
-  reader.read("hourglass", spec.hourglass);
-  reader.read("law", spec.law,
-              {{"neo-hookean", fem::Law::neo_hookean}, {"linear", fem::Law::linear}});
+  reader.read_fields(spec);
+  // An invalid `model` requires nothing; what is given decides what else is required.
+  material_model_known_ = !reader.value_loc("model") || reader.given("model");
+  material_given_ = {reader.value_loc("stiffness"), reader.value_loc("young"),
+                     reader.value_loc("poisson"), reader.value_loc("calibration_axis")};
+  spec.young_loc = reader.value_loc("young").value_or(SourceLoc{});
   spec.law_loc = reader.value_loc("law").value_or(SourceLoc{});
-  reader.read("hexa", spec.hexa,
-              {{"mean-dilatation", fem::HexaElement::mean_dilatation},
-               {"incompatible-modes", fem::HexaElement::incompatible_modes}});
   spec.hexa_loc = reader.value_loc("hexa").value_or(SourceLoc{});
-  reader.read("density", spec.density);
-  reader.read("mass", spec.mass);
-  reader.read("frame", spec.frame, {{"polar", FrameMode::polar}, {"frame", FrameMode::frame}});
-  reader.read("reaction", spec.reaction);
   reader.done();
   return spec;
 }
 
-void SceneBuilder::refer(SectionReader& reader, std::string& object) {
-  if (reader.read("object", object))
-    references_.push_back({object, *reader.value_loc("object"), reader.where()});
+// Remembers a valid object name `key` refers to, checked once every object is read.
+void SceneBuilder::refer(SectionReader& reader, std::string_view key, const std::string& object) {
+  if (reader.given(key)) references_.push_back({object, *reader.value_loc(key), reader.where()});
 }
 
 // A nodal force or a pressure: every field is read whatever the type (the table's
@@ -549,13 +481,11 @@ void SceneBuilder::load(SectionReader& reader, Scene& scene) {
   spec.loc = reader.loc();
   std::string type;
   reader.read("type", type);
-  refer(reader, spec.object);
-  reader.read("nodes", spec.nodes);
-  Eigen::Vector3d force = Eigen::Vector3d::Zero();
-  if (reader.read("force", force)) spec.force = Schedule::constant(force);
-  reader.read("schedule", spec.force);
+  reader.read_fields(spec);
+  refer(reader, "object", spec.object);
   PressureSpec pressure;
-  io::read_pressure_fields(reader, pressure);
+  reader.read_fields(pressure);
+  io::read_pressure_cylinder(reader, pressure);
   reader.done();
   if (type == "pressure") {
     pressure.object = spec.object;
@@ -570,18 +500,8 @@ void SceneBuilder::load(SectionReader& reader, Scene& scene) {
 ConstraintSpec SceneBuilder::constraint(SectionReader& reader) {
   ConstraintSpec spec;
   spec.loc = reader.loc();
-  reader.read("type", spec.kind,
-              {{"fixed", ConstraintSpec::Kind::fixed},
-               {"displacement", ConstraintSpec::Kind::displacement},
-               {"spring", ConstraintSpec::Kind::spring}});
-  refer(reader, spec.object);
-  reader.read("nodes", spec.nodes);
-  reader.read("axes", spec.axes);
-  Eigen::Vector3d displacement = Eigen::Vector3d::Zero();
-  if (reader.read("displacement", displacement))
-    spec.displacement = Schedule::constant(displacement);
-  reader.read("schedule", spec.displacement);
-  reader.read("stiffness", spec.stiffness);
+  reader.read_fields(spec);
+  refer(reader, "object", spec.object);
   reader.done();
   // A fixed node is a zero displacement on every axis; spelling it out lets later stages
   // treat both kinds alike.
@@ -593,10 +513,7 @@ ConstraintSpec SceneBuilder::constraint(SectionReader& reader) {
 OutputSpec SceneBuilder::output(SectionReader& reader) {
   OutputSpec spec;
   spec.loc = reader.loc();
-  reader.read("interval", spec.interval);
-  reader.read("vtk", spec.vtk);
-  reader.read("format", spec.format,
-              {{"ascii", VtuEncoding::ascii}, {"binary", VtuEncoding::binary}});
+  reader.read_fields(spec);
   reader.done();
   return spec;
 }

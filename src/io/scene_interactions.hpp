@@ -17,9 +17,8 @@ struct ObjectReference {
   std::string where;
 };
 
-// The fields of a `type: pressure` load other than type, object and nodes (read by the
-// caller, shared with force loads). Always reads every field, whatever the type.
-void read_pressure_fields(SectionReader& reader, PressureSpec& spec);
+// The `cylinder` of a pressure load (read whatever the type: the table's conditions skip it).
+void read_pressure_cylinder(SectionReader& reader, PressureSpec& spec);
 
 // One entry of `obstacles` / `contacts`; the object names go to `references`.
 ObstacleSpec read_obstacle(SectionReader& reader, std::vector<ObjectReference>& references);

@@ -173,7 +173,7 @@ void prepare_scene(Scene& scene) {
   if (!problems.empty()) throw SceneError(std::move(problems));
   for (ObjectSpec& o : scene.objects)
     if (o.type != ObjectType::rigid && o.material.model == ElasticModel::shape_memory &&
-        o.material.young > 0.0)
+        o.material.young)
       calibrate(o, problems);
   if (!problems.empty()) throw SceneError(std::move(problems));
 }

@@ -15,7 +15,9 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include "io/parameter_table.hpp"
@@ -62,6 +64,9 @@ class SectionReader {
   SceneContext& context() const { return *context_; }
   // Position of the value the scene gives for `name`, if any.
   std::optional<SourceLoc> value_loc(std::string_view name) const;
+  // Whether the scene gives `name` a valid value that read_fields read.
+  bool given(std::string_view name) const { return given_.contains(name); }
+  const std::string& section() const { return section_; }
 
   bool read(std::string_view name, double& out);
   bool read(std::string_view name, std::optional<double>& out);  // the keyword gives nullopt
@@ -83,20 +88,6 @@ class SectionReader {
   // A list of object names (scene_reader_interactions.cpp), with where each was written.
   bool read(std::string_view name, std::vector<std::string>& out, std::vector<SourceLoc>& locs);
 
-  template <class Enum>
-  bool read(std::string_view name, Enum& out,
-            std::initializer_list<std::pair<std::string_view, Enum>> words) {
-    std::string word;
-    if (!read(name, word)) return false;
-    for (const auto& [text, value] : words) {
-      if (text != word) continue;
-      out = value;
-      return true;
-    }
-    throw std::logic_error("choice '" + word + "' of '" + std::string(name) +
-                           "' in the parameter table has no meaning in the parser");
-  }
-
   // A nested map: nullopt when it is invalid, or absent while it has required fields.
   std::optional<SectionReader> map(std::string_view name);
   // Calls `read_entry` for each map of a list field, in order.
@@ -105,6 +96,11 @@ class SectionReader {
   // Throws std::logic_error when a field of the section was never read: the table and the
   // parser disagree. Deterministic per code path, so tests catch it.
   void done() const;
+
+  // Reads every field of the section that lands in a member of Spec (Parameter::lands), each
+  // into its member; an absent field leaves the member at Spec's default.
+  template <class Spec>
+  void read_fields(Spec& spec);
 
  private:
   enum class Applies { yes, no, unknown };
@@ -162,7 +158,52 @@ class SectionReader {
   SourceLoc loc_;
   std::map<std::string, Entry, std::less<>> entries_;
   std::set<std::string, std::less<>> read_;
+  std::set<std::string, std::less<>> given_;
 };
+
+namespace detail {
+
+// One field into its member: a Schedule member may take a constant (`force`, `pressure`).
+template <class Spec, class Member>
+bool read_member(SectionReader& reader, const Parameter& p, Spec& spec, const Member& member) {
+  if constexpr (std::is_same_v<Member, ChoiceMember<Spec>>) {
+    std::string word;
+    if (!reader.read(p.name, word)) return false;
+    member.set(spec, word);
+    return true;
+  } else {
+    auto& target = spec.*member;
+    if constexpr (std::is_same_v<std::decay_t<decltype(target)>, Schedule>) {
+      if (p.kind == Kind::scalar_schedule) return reader.read_scalar(p.name, target);
+      if (p.kind == Kind::quantity) {
+        double value = 0.0;
+        if (!reader.read(p.name, value)) return false;
+        target = Schedule::constant({value, 0.0, 0.0});
+        return true;
+      }
+      if (p.kind == Kind::vector) {
+        Eigen::Vector3d value = Eigen::Vector3d::Zero();
+        if (!reader.read(p.name, value)) return false;
+        target = Schedule::constant(value);
+        return true;
+      }
+    }
+    return reader.read(p.name, target);
+  }
+}
+
+}  // namespace detail
+
+template <class Spec>
+void SectionReader::read_fields(Spec& spec) {
+  for (const Parameter* p : section_parameters(section_)) {
+    const auto* member = std::any_cast<FieldMember<Spec>>(&p->lands.member);
+    if (!member) continue;
+    const bool ok =
+        std::visit([&](const auto& m) { return detail::read_member(*this, *p, spec, m); }, *member);
+    if (ok && value_loc(p->name)) given_.emplace(p->name);
+  }
+}
 
 }  // namespace phymul::io
 

@@ -150,40 +150,23 @@ bool SectionReader::read(std::string_view name, std::vector<std::string>& out,
 
 // ---- Sections
 
-void read_pressure_fields(SectionReader& reader, PressureSpec& spec) {
-  double constant = 0.0;
-  if (reader.read("pressure", constant)) spec.pressure = Schedule::constant({constant, 0.0, 0.0});
-  reader.read_scalar("pressure_schedule", spec.pressure);
+void read_pressure_cylinder(SectionReader& reader, PressureSpec& spec) {
   if (auto cylinder = reader.map("cylinder")) {
-    SceneContext& context = reader.context();
-    const bool has_point = cylinder->read("point", spec.cylinder_point);
-    const bool has_axis = read_direction(context, *cylinder, "axis", spec.cylinder_axis);
-    const bool has_radius = cylinder->read("radius", spec.cylinder_radius);
+    cylinder->read_fields(spec);
+    const bool has_axis = read_direction(reader.context(), *cylinder, "axis", spec.cylinder_axis);
     cylinder->done();
-    spec.in_cylinder = has_point && has_axis && has_radius;
+    spec.in_cylinder = cylinder->given("point") && has_axis && cylinder->given("radius");
   }
 }
 
 ObstacleSpec read_obstacle(SectionReader& reader, std::vector<ObjectReference>& references) {
-  using Shape = ObstacleSpec::Shape;
   ObstacleSpec spec;
   spec.loc = reader.loc();
-  reader.read("name", spec.name);
-  reader.read("shape", spec.shape,
-              {{"plane", Shape::plane},
-               {"sphere", Shape::sphere},
-               {"capsule", Shape::capsule},
-               {"probe", Shape::probe}});
-  reader.read("position", spec.position);
+  reader.read_fields(spec);
   read_direction(reader.context(), reader, "axis", spec.axis);
-  reader.read("radius", spec.radius);
-  reader.read("length", spec.length);
-  reader.read("motion", spec.motion);
-  reader.read("keep_inside", spec.keep_inside);
   if (reader.read("objects", spec.objects, spec.object_locs))
     for (size_t i = 0; i < spec.objects.size(); ++i)
       references.push_back({spec.objects[i], spec.object_locs[i], reader.where()});
-  reader.read("friction", spec.friction);
   reader.done();
   return spec;
 }
@@ -206,9 +189,9 @@ ContactSpec read_contact(SectionReader& reader, std::vector<ObjectReference>& re
 namespace {
 
 // An `object` field that names an object, checked against the objects once all are read.
-void refer_object(SectionReader& reader, std::string& object, SourceLoc& at,
+void refer_object(SectionReader& reader, const std::string& object, SourceLoc& at,
                   std::vector<ObjectReference>& references) {
-  if (!reader.read("object", object)) return;
+  if (!reader.given("object")) return;
   at = *reader.value_loc("object");
   references.push_back({object, at, reader.where()});
 }
@@ -218,27 +201,21 @@ void refer_object(SectionReader& reader, std::string& object, SourceLoc& at,
 NeedleSpec read_needle(SectionReader& reader, std::vector<ObjectReference>& references) {
   NeedleSpec spec;
   spec.loc = reader.loc();
-  reader.read("name", spec.name);
-  reader.read("base", spec.base);
+  reader.read_fields(spec);
   read_direction(reader.context(), reader, "direction", spec.direction);
-  reader.read_scalar("depth", spec.depth);
-  reader.read("radius", spec.radius);
-  reader.read("spacing", spec.spacing);
   reader.items("tissues", [&](SectionReader& r) {
     NeedleTissueSpec t;
     t.loc = r.loc();
+    r.read_fields(t);
     refer_object(r, t.object, t.object_loc, references);
-    r.read("puncture_force", t.puncture_force);
-    r.read("friction", t.friction);
-    r.read("cutting_force", t.cutting_force);
     r.done();
     spec.tissues.push_back(std::move(t));
   });
   if (auto r = reader.map("target"); r && reader.value_loc("target")) {
     NeedleTargetSpec t;
     t.loc = r->loc();
+    r->read_fields(t);
     refer_object(*r, t.object, t.object_loc, references);
-    r->read("point", t.point);
     r->done();
     spec.target = std::move(t);
   }

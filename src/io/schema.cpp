@@ -33,13 +33,92 @@ const io::Parameter& quantity(std::string_view section, std::string_view name) {
   return p;
 }
 
+// The kind as a program names it (io::kind_name is the reference's wording).
+std::string_view kind_word(io::Kind kind) {
+  using io::Kind;
+  switch (kind) {
+    case Kind::quantity:
+      return "quantity";
+    case Kind::vector:
+      return "vector";
+    case Kind::integer:
+      return "integer";
+    case Kind::integer_vector:
+      return "integer_vector";
+    case Kind::integers:
+      return "integers";
+    case Kind::boolean:
+      return "boolean";
+    case Kind::choice:
+      return "choice";
+    case Kind::name:
+      return "name";
+    case Kind::axes:
+      return "axes";
+    case Kind::selector:
+      return "selector";
+    case Kind::schedule:
+      return "schedule";
+    case Kind::scalar_schedule:
+      return "scalar_schedule";
+    case Kind::names:
+      return "names";
+    case Kind::list:
+      return "list";
+    case Kind::map:
+      return "map";
+    case Kind::path:
+      return "path";
+    case Kind::text:
+      return "text";
+  }
+  return "?";
+}
+
+SceneField field_of(const io::Parameter& p) {
+  SceneField f;
+  f.section = p.section;
+  f.name = p.name;
+  f.kind = kind_word(p.kind);
+  f.unit = io::dimension_info(p.dimension).si;
+  f.range = p.range.str();
+  for (const auto word : p.choices) f.choices.emplace_back(word);
+  f.doc = p.doc;
+  f.editable = p.editable;
+  return f;
+}
+
 }  // namespace
 
 SceneField scene_field(std::string_view section, std::string_view name) {
-  const io::Parameter& p = find(section, name);
-  return {std::string(p.section), std::string(p.name),
-          std::string(io::dimension_info(p.dimension).si), p.range.str(), std::string(p.doc)};
+  return field_of(find(section, name));
 }
+
+template <class Spec>
+std::vector<BoundField<Spec>> bound_fields() {
+  std::vector<BoundField<Spec>> out;
+  for (const io::Parameter& p : io::parameter_table())
+    if (const auto* member = std::any_cast<FieldMember<Spec>>(&p.lands.member))
+      out.push_back({field_of(p), *member});
+  return out;
+}
+
+template std::vector<BoundField<SimulationSpec>> bound_fields();
+template std::vector<BoundField<ObjectSpec>> bound_fields();
+template std::vector<BoundField<MeshSpec>> bound_fields();
+template std::vector<BoundField<MeshTransform>> bound_fields();
+template std::vector<BoundField<MaterialSpec>> bound_fields();
+template std::vector<BoundField<LoadSpec>> bound_fields();
+template std::vector<BoundField<PressureSpec>> bound_fields();
+template std::vector<BoundField<ConstraintSpec>> bound_fields();
+template std::vector<BoundField<ObstacleSpec>> bound_fields();
+template std::vector<BoundField<OutputSpec>> bound_fields();
+template std::vector<BoundField<LinkSpec>> bound_fields();
+template std::vector<BoundField<MotionSpec>> bound_fields();
+template std::vector<BoundField<FibreSpec>> bound_fields();
+template std::vector<BoundField<NeedleSpec>> bound_fields();
+template std::vector<BoundField<NeedleTissueSpec>> bound_fields();
+template std::vector<BoundField<NeedleTargetSpec>> bound_fields();
 
 double check_scene_field(std::string_view section, std::string_view name, double value) {
   const io::Parameter& p = quantity(section, name);

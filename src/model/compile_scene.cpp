@@ -68,7 +68,7 @@ struct Compiler {
         return;
       }
       MaterialSpec material = o.material;
-      if (material.model == ElasticModel::shape_memory && material.young > 0.0 &&
+      if (material.model == ElasticModel::shape_memory && material.young &&
           !calibrated(o, material))
         return;
       const int c = add_elastic_component(model, o.name, *mesh, material);

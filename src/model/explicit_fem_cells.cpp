@@ -77,15 +77,17 @@ void add_tetra(ExplicitFem& fem, const std::string& component, int cell, const C
 
 ExplicitFem build_explicit_fem(const std::string& component, const Mesh& mesh, int first_node,
                                const MaterialSpec& material, std::span<const Vec3> rest) {
-  if (!(material.young > 0.0) || !(material.poisson > -1.0 && material.poisson < 0.5))
+  const double young = material.young.value_or(0.0), poisson = material.poisson.value_or(0.0);
+  if (!material.young || !material.poisson || !(young > 0.0) || !(poisson > -1.0 && poisson < 0.5))
     throw std::invalid_argument(fmt::format(
-        "object '{}': finite elements need young > 0 Pa and poisson in (-1, 0.5) (got {} Pa, {})",
-        component, material.young, material.poisson));
+        "object '{}': finite elements need young > 0 Pa and poisson in (-1, 0.5) (got {}, {})",
+        component, material.young ? fmt::format("{} Pa", young) : "no young",
+        material.poisson ? fmt::format("{}", poisson) : "no poisson"));
   ExplicitFem fem;
   fem.component = component;
-  fem.material = {material.law, material.young, material.poisson, material.hexa};
-  fem.mu = material.young / (2.0 * (1.0 + material.poisson));
-  fem.kappa = material.young / (3.0 * (1.0 - 2.0 * material.poisson));
+  fem.material = {material.law, young, poisson, material.hexa};
+  fem.mu = young / (2.0 * (1.0 + poisson));
+  fem.kappa = young / (3.0 * (1.0 - 2.0 * poisson));
   const bool hexa = !mesh.cells.empty() && mesh.cells[0].type == CellType::hexa;
   fem.nodes_per_cell = hexa ? 8 : 4;
   for (int e = 0; e < int(mesh.cells.size()); ++e) {

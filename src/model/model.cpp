@@ -150,9 +150,10 @@ int add_mesh(Model& model, const std::string& name, const Mesh& mesh,
 int add_elastic_component(Model& model, const std::string& name, const Mesh& mesh,
                           const MaterialSpec& material) {
   validate(mesh);
-  if (material.model == ElasticModel::shape_memory && !(material.stiffness > 0.0))
-    throw std::invalid_argument(
-        fmt::format("object '{}': 'stiffness' must be > 0 N/m (got {})", name, material.stiffness));
+  if (material.model == ElasticModel::shape_memory && !(material.stiffness.value_or(0.0) > 0.0))
+    throw std::invalid_argument(fmt::format(
+        "object '{}': 'stiffness' must be > 0 N/m (got {})", name,
+        material.stiffness ? fmt::format("{} N/m", *material.stiffness) : std::string("none")));
   const int first_node = model.node_count();
   const int component = add_mesh(model, name, mesh, material);
   if (material.model == ElasticModel::fem)

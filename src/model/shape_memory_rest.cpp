@@ -42,7 +42,7 @@ ShapeMemory build_shape_memory(const std::string& component, const Mesh& mesh, i
                                const MaterialSpec& material, std::span<const Vec3> rest) {
   ShapeMemory m;
   m.component = component;
-  m.stiffness = material.stiffness;
+  m.stiffness = material.stiffness.value_or(0.0);  // > 0 for elastic parts (add_elastic_component)
   m.frame = material.frame;
   m.reaction = material.reaction;
   m.surface = !mesh.volumetric();

@@ -151,7 +151,7 @@ Pushed push_both(const Push& p, const std::string& what) {
   Simulator sim(r.lsm);
   r.lsm_iterations = relax_or_throw(sim, 1.0, p.max_iterations, what).iterations;
   r.lsm_force_per_k =
-      axis_force(sim.support_reactions(), p.pushed, p.axis) / p.lsm_material.stiffness;
+      axis_force(sim.support_reactions(), p.pushed, p.axis) / *p.lsm_material.stiffness;
   r.lsm_state = sim.data();
   return r;
 }
@@ -254,10 +254,14 @@ std::vector<int> end_nodes(const Mesh& mesh, int axis, double band, bool lowest,
 StiffnessCalibration calibrate_object(const std::string& name, const Mesh& mesh,
                                       const MaterialSpec& material, bool volume_constraint,
                                       int axis, double strain) {
+  if (!material.young || !material.poisson)
+    throw std::invalid_argument(
+        fmt::format("object '{}': calibrating K needs the material's 'young' and 'poisson'", name));
+  const double young = *material.young, poisson = *material.poisson;
   StiffnessCalibration c;
   c.component = name;
-  c.young = material.young;
-  c.poisson = material.poisson;
+  c.young = young;
+  c.poisson = poisson;
   c.axis = axis;
   c.strain = strain;
   Push p;
@@ -280,9 +284,9 @@ StiffnessCalibration calibrate_object(const std::string& name, const Mesh& mesh,
   const auto [low, high] = bounding_box(mesh.points);
   c.push = strain * (high[axis] - low[axis]);
   p.push = -c.push;
-  p.fem_material = {fem::Law::linear, material.young, material.poisson};
+  p.fem_material = {fem::Law::linear, young, poisson};
   p.load_steps = 1;
-  const double k1 = material.young * c.h;
+  const double k1 = young * c.h;
   p.lsm_material = material;
   p.lsm_material.model = ElasticModel::shape_memory;
   p.lsm_material.stiffness = k1;
@@ -295,7 +299,7 @@ StiffnessCalibration calibrate_object(const std::string& name, const Mesh& mesh,
   c.fem_newton_iterations = r.fem.newton_iterations;
   c.lsm_iterations = r.lsm_iterations;
   c.stiffness = r.fem_force / r.lsm_force_per_k;
-  c.alpha = c.stiffness / (material.young * c.h);
+  c.alpha = c.stiffness / (young * c.h);
   std::tie(c.displacement_rms, c.displacement_max) =
       displacement_difference(mesh.points, r.lsm_state.x, r.fem.displacement, c.push);
   return c;

@@ -19,8 +19,9 @@ void run_shape_memory(const Study& study, const std::vector<Bead>& beads,
   const Plates plates = plate_nodes(study.mesh, study.frame);
   Model model;
   MaterialSpec material;
-  material.density = 1000.0;                                     // kg/m^3, silicone gel
-  material.stiffness = options.young * (kEdge / options.cells);  // positions do not depend on it
+  material.density = 1000.0;                                 // kg/m^3, silicone gel
+  const double k = options.young * (kEdge / options.cells);  // positions do not depend on it
+  material.stiffness = k;
   material.frame = options.frame;
   material.reaction = options.reaction;
   const int c = add_elastic_component(model, "cube", study.mesh, material);
@@ -50,8 +51,8 @@ void run_shape_memory(const Study& study, const std::vector<Bead>& beads,
   const double force_scale =
       calibration::calibrate_object("cube", study.mesh, tissue, options.volume_constraint)
           .stiffness /
-      material.stiffness;
-  model.settings.tolerance = options.tolerance * material.stiffness * (kEdge / options.cells);
+      k;
+  model.settings.tolerance = options.tolerance * k * (kEdge / options.cells);
   model.settings.max_iterations = 400000;
   model.settings.mode = SolveMode::static_equilibrium;  // relaxation masses (Simulator)
   model.settings.relaxation = Relaxation::fire;

@@ -145,7 +145,7 @@ TEST(SceneTest, FullSceneObjects) {
   EXPECT_EQ(cube.mesh.cells, (std::array<int, 3>{8, 6, 10}));
   expect_vec(cube.mesh.center, {0.01, 0, -0.002});
   expect_loc(cube.mesh.loc, 15, 5);
-  EXPECT_DOUBLE_EQ(cube.material.stiffness, 50.0);
+  EXPECT_DOUBLE_EQ(cube.material.stiffness.value(), 50.0);
   ASSERT_TRUE(cube.material.density.has_value());
   EXPECT_DOUBLE_EQ(*cube.material.density, 1050.0);
   EXPECT_FALSE(cube.material.mass.has_value());
@@ -161,7 +161,7 @@ TEST(SceneTest, FullSceneObjects) {
   EXPECT_EQ(liver.mesh.subdivisions, 3);
   EXPECT_EQ(liver.mesh.layers, 4);
   EXPECT_FALSE(liver.mesh.surface);
-  EXPECT_DOUBLE_EQ(liver.material.stiffness, 2000.0);
+  EXPECT_DOUBLE_EQ(liver.material.stiffness.value(), 2000.0);
   EXPECT_FALSE(liver.material.density.has_value());
   EXPECT_DOUBLE_EQ(liver.material.mass.value_or(0), 0.25);
   EXPECT_EQ(liver.material.frame, FrameMode::polar);
@@ -176,7 +176,7 @@ TEST(SceneTest, FullSceneObjects) {
   EXPECT_EQ(vessel.mesh.along, 5);
   EXPECT_EQ(vessel.mesh.rings, 3);
   EXPECT_FALSE(vessel.mesh.surface);
-  EXPECT_DOUBLE_EQ(vessel.material.stiffness, 100.0);
+  EXPECT_DOUBLE_EQ(vessel.material.stiffness.value(), 100.0);
   EXPECT_DOUBLE_EQ(vessel.material.mass.value_or(0), 0.1);
 
   const auto& shell = scene.objects[3];
@@ -186,7 +186,7 @@ TEST(SceneTest, FullSceneObjects) {
   EXPECT_DOUBLE_EQ(shell.mesh.length, 0.02);
   EXPECT_EQ(shell.mesh.around, 16);
   EXPECT_EQ(shell.mesh.along, 4);
-  EXPECT_DOUBLE_EQ(shell.material.stiffness, 1.0);
+  EXPECT_DOUBLE_EQ(shell.material.stiffness.value(), 1.0);
   EXPECT_DOUBLE_EQ(shell.material.mass.value_or(0), 0.01);
 }
 
