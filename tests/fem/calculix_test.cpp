@@ -3,7 +3,7 @@
 // orders and the material mapping, then the bonded 80 mm cube is solved by ccx and by
 // phymul::fem::solve_static and the two must agree. Without ccx those tests are skipped
 // loudly: the cross-check did not run.
-#include "fem/calculix.hpp"
+#include "support/calculix.hpp"
 
 #include <gtest/gtest.h>
 

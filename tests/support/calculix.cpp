@@ -1,5 +1,5 @@
-// CalculiX deck writer, runner and .dat reader (see calculix.hpp).
-#include "fem/calculix.hpp"
+// CalculiX deck writer, runner and .dat reader (see calculix.hpp): the tests' cross-check.
+#include "support/calculix.hpp"
 
 #include <fmt/format.h>
 #include <sys/wait.h>

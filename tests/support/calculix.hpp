@@ -1,5 +1,6 @@
-// CalculiX (ccx) as an independent check of the reference FEM (DESIGN 5): writes an input
-// deck for a phymul::fem problem, runs ccx on it and reads the nodal results back.
+// CalculiX (ccx) as an independent check of the reference FEM (DESIGN 5), for the tests
+// (fem/calculix_test.cpp): writes an input deck for a phymul::fem problem, runs ccx on it
+// and reads the nodal results back.
 //
 // The reference law is CalculiX's *HYPERELASTIC, NEO HOOKE
 //   U = C10 (I1bar - 3) + 1/D1 (J - 1)^2,  C10 = mu / 2,  D1 = 2 / K,
