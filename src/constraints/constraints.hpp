@@ -17,11 +17,9 @@ void apply_prescribed(const Model& model, std::span<Vec3> x, double load_time);
 void volume_gradient(const VolumeConstraint& c, std::span<const Vec3> x, std::span<Vec3> grad);
 
 // Moves the surface nodes along w_i dV/dx_i (w = per-axis inverse mass, 0 on held axes) by
-// the root of the cubic V(x + lambda d) = target nearest to 0. Returns lambda; throws
+// the root of the cubic V(x + lambda d) = target (m^3) nearest to 0. Returns lambda; throws
 // std::runtime_error when no free node can change the volume. grad is scratch (node count).
-double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
-                      std::span<Vec3> x, std::span<Vec3> grad);
-// The same towards `target` (m^3); reports |V - target| / target before the move.
+// Reports |V - target| / target before the move.
 double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
                       std::span<Vec3> x, std::span<Vec3> grad, double target,
                       double* relative_error_before = nullptr);

@@ -117,18 +117,9 @@ void apply_friction(const RigidObstacle& o, const Vec3& free, Vec3& x, const Vec
 
 }  // namespace
 
-SurfaceDistance obstacle_distance(const RigidObstacle& o, const Vec3& x, double load_time) {
-  return distance_from(o, shape_base(o, o.motion, load_time), x);
-}
-
 SurfaceDistance obstacle_distance(const RigidObstacle& o, const Schedule& motion, const Vec3& x,
                                   double load_time) {
   return distance_from(o, shape_base(o, motion, load_time), x);
-}
-
-Vec3 closest_surface_point(const RigidObstacle& o, const Vec3& x, double load_time) {
-  const SurfaceDistance s = obstacle_distance(o, x, load_time);
-  return x - s.distance * s.normal;
 }
 
 namespace {
@@ -144,11 +135,6 @@ void project_obstacle_at(const RigidObstacle& o, std::span<const Vec3> inverse_m
 }
 
 }  // namespace
-
-void project_obstacle(const RigidObstacle& o, std::span<const Vec3> inverse_mass, std::span<Vec3> x,
-                      double load_time) {
-  project_obstacle_at(o, inverse_mass, x, shape_base(o, o.motion, load_time));
-}
 
 void apply_contacts(const Model& model, const Controls& controls, std::span<Vec3> x,
                     double load_time) {

@@ -129,11 +129,6 @@ void volume_gradient(const VolumeConstraint& c, std::span<const Vec3> x, std::sp
   });
 }
 
-double project_volume(const VolumeConstraint& c, std::span<const Vec3> inverse_mass,
-                      std::span<Vec3> x, std::span<Vec3> grad) {
-  return project_volume(c, inverse_mass, x, grad, c.target_volume);
-}
-
 namespace {
 
 // The move along the direction d in grad (on c's nodes) that puts V at target: the root of

@@ -6,11 +6,6 @@
 
 namespace phymul {
 
-void add_pressure_forces(const PressureLoad& load, std::span<const Vec3> x, std::span<Vec3> f,
-                         double load_time) {
-  add_pressure(load, load.pressure.at(load_time).x(), x, f);
-}
-
 void add_pressure(const PressureLoad& load, double p, std::span<const Vec3> x, std::span<Vec3> f) {
   if (p == 0.0) return;
   for (const Triangle& t : load.faces) {

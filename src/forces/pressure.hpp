@@ -7,11 +7,8 @@
 
 namespace phymul {
 
-// Adds to f the pressure of load at load_time: on each face, -p * (area-weighted outward
+// Adds to f the pressure p (Pa) on load's faces: on each face, -p * (area-weighted outward
 // normal of the current triangle) / 3 on each of its nodes. Allocates nothing.
-void add_pressure_forces(const PressureLoad& load, std::span<const Vec3> x, std::span<Vec3> f,
-                         double load_time);
-// The same with the pressure p (Pa) given.
 void add_pressure(const PressureLoad& load, double p, std::span<const Vec3> x, std::span<Vec3> f);
 
 }  // namespace phymul

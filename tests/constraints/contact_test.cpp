@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "phymul/simulation.hpp"
+#include "support/kernels.hpp"
 #include "support/models.hpp"
 
 namespace phymul {

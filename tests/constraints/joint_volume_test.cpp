@@ -8,6 +8,7 @@
 #include "constraints/coupled_volume.hpp"
 #include "constraints/volume_lanes.hpp"
 #include "phymul/simulation.hpp"
+#include "support/kernels.hpp"
 #include "support/models.hpp"
 
 namespace phymul {

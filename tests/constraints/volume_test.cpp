@@ -3,6 +3,7 @@
 #include <random>
 
 #include "constraints/constraints.hpp"
+#include "support/kernels.hpp"
 #include "support/models.hpp"
 
 namespace phymul {

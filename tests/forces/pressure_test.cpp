@@ -5,6 +5,7 @@
 #include <random>
 
 #include "phymul/forces.hpp"
+#include "support/kernels.hpp"
 #include "support/models.hpp"
 
 namespace phymul {

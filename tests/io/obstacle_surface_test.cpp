@@ -8,7 +8,7 @@
 
 #include <fstream>
 
-#include "constraints/contact.hpp"
+#include "support/kernels.hpp"
 #include "support/models.hpp"
 #include "support/process.hpp"
 
