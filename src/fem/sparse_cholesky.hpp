@@ -28,9 +28,6 @@ class SupernodalCholesky {
 
   // Smallest over largest pivot (squared diagonal of L) of the last factorisation.
   double pivot_ratio() const { return pivot_max_ > 0.0 ? pivot_min_ / pivot_max_ : 0.0; }
-  std::int64_t factor_entries() const { return std::int64_t(values_.size()); }
-  double factor_flops() const;  // floating-point operations of one factorisation
-  int supernode_count() const { return int(nodes_.size()); }
 
  private:
   struct Supernode {

@@ -225,13 +225,4 @@ void SupernodalCholesky::build_scatter(const std::vector<int>& row, const std::v
   }
 }
 
-double SupernodalCholesky::factor_flops() const {
-  double flops = 0.0;
-  for (const Supernode& s : nodes_) {
-    const double k = s.columns, b = s.rows - s.columns;
-    flops += k * k * k / 3.0 + b * k * k + b * b * k;
-  }
-  return flops;
-}
-
 }  // namespace phymul::fem

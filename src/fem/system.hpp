@@ -27,7 +27,6 @@ class System {
   int dof_count() const { return int(dof_index_.size()); }
   int free_count() const { return int(free_dofs_.size()); }
   int prescribed_count() const { return int(prescribed_dofs_.size()); }
-  bool is_free(int dof) const { return dof_index_[dof] >= 0; }
   const std::vector<int>& free_dofs() const { return free_dofs_; }
   const std::vector<int>& prescribed_dofs() const { return prescribed_dofs_; }
 

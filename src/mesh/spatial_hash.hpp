@@ -59,8 +59,6 @@ class TriangleHash {
     ++stamp_;
   }
 
-  double cell_size() const { return cell_; }
-
  private:
   uint32_t bucket(const Cell& c) const;
   bool visited_stamp(uint32_t b);
