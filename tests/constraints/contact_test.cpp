@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
+#include <vector>
 
 #include "phymul/simulation.hpp"
 #include "support/kernels.hpp"
@@ -99,6 +101,66 @@ TEST(ContactProjection, KeepInsideHoldsNodesInAContainer) {
   project_obstacle(box_wall, w, x, 0.0);
   expect_vec_near(x[0], Vec3(0, 0, 1), 1e-15);
   EXPECT_EQ(x[1], Vec3(0, 0.5, 0));
+}
+
+// The explicit step's position stage (apply_contacts with a ContactStep: friction and the
+// records) against the plain projection the implicit step, the static solver and the start
+// of a run take: without friction they move every node to the same bits, and the records
+// say which obstacle moved it and the momentum m dx / dt it gave.
+TEST(ContactProjection, StepStageWithoutFrictionIsThePlainProjection) {
+  Model model;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const int n = 400;
+  for (int i = 0; i < n; ++i) {
+    model.rest_position.push_back(testing::random_vec3(u, rng));
+    model.mass.push_back(0.5 + 0.5 * (u(rng) + 1.0));
+    // Every fourth node held on one axis, every tenth on all: the projection keeps to the rest.
+    Vec3 w = Vec3::Constant(1.0 / model.mass.back());
+    if (i % 4 == 1) w[i % 3] = 0.0;
+    if (i % 10 == 3) w.setZero();
+    model.inverse_mass.push_back(w);
+  }
+  model.obstacles = {shape(Shape::sphere, Vec3(0.2, 0, 0), Vec3::UnitZ(), 0.5),
+                     shape(Shape::capsule, Vec3(-0.5, -0.5, -0.5), Vec3(1, 1, 1), 0.3, 1.0),
+                     shape(Shape::plane, Vec3(0, 0, -0.6), Vec3(0.1, 0.2, 1.0)),
+                     shape(Shape::probe, Vec3(0, 0.7, 0), Vec3(0, 1, 0), 0.2)};
+  RigidObstacle container = shape(Shape::sphere, Vec3::Zero(), Vec3::UnitZ(), 1.5);
+  container.keep_inside = true;
+  model.obstacles.push_back(container);
+  model.obstacles[1].nodes = {1, 5, 8, 13, 21, 34, 55, 89, 144, 233, 377};
+  Controls controls;
+  for (const RigidObstacle& o : model.obstacles) controls.obstacle_motion.push_back(o.motion);
+  controls.obstacle_motion[0] = Schedule{{0.0, 1.0}, {Vec3::Zero(), Vec3(0.1, 0.2, 0.0)}};
+
+  std::vector<Vec3> plain = model.rest_position;
+  apply_contacts(model, controls, plain, 0.5);
+  std::vector<Vec3> staged = model.rest_position;
+  std::vector<int> touching(size_t(n), -1);
+  std::vector<Vec3> impulse(model.obstacles.size(), Vec3::Zero());
+  ContactStep step;
+  step.x_start = model.rest_position;
+  step.start_time = 0.4;
+  step.dt = 0.1;
+  step.touching = touching;
+  step.impulse = impulse;
+  apply_contacts(model, controls, staged, 0.5, step);
+
+  // Every move is recorded: the momenta the obstacles gave add up to the nodes' m dx / dt.
+  int moved = 0;
+  Vec3 momentum = Vec3::Zero(), given = Vec3::Zero();
+  double scale = 0.0;  // N s, the sum of the nodes' momenta's magnitudes
+  for (int i = 0; i < n; ++i) {
+    ASSERT_EQ(staged[size_t(i)], plain[size_t(i)]) << "node " << i;
+    const Vec3 dx = plain[size_t(i)] - model.rest_position[size_t(i)];
+    EXPECT_EQ(touching[size_t(i)] >= 0, dx != Vec3::Zero()) << "node " << i;
+    moved += dx != Vec3::Zero();
+    momentum += model.mass[size_t(i)] * dx / 0.1;
+    scale += model.mass[size_t(i)] * dx.norm() / 0.1;
+  }
+  for (const Vec3& p : impulse) given += p;
+  EXPECT_GT(moved, 40);
+  EXPECT_LE((given - momentum).norm(), 1e-12 * scale);
 }
 
 TEST(ContactProjection, BuilderChecksItsInput) {
