@@ -12,6 +12,8 @@
 #include <memory>
 #include <vector>
 
+#include "model/block_cholesky.hpp"
+
 namespace phymul {
 
 // L L^T of one axis's matrix P, symmetrically permuted by a fill-reducing order beforehand
@@ -27,14 +29,21 @@ struct ImplicitSystem {
   // Per axis: each node's unknown (doubled groups share one), -1 on a held axis.
   std::array<std::vector<int>, 3> unknown;
   std::array<int, 3> unknowns{0, 0, 0};
-  // Per axis: its factor; axes holding the same nodes share one.
+  // Per axis: its factor; axes holding the same nodes share one. Null where `coupled` is set.
   std::array<std::shared_ptr<const ImplicitFactor>, 3> factor;
+  // Or one factor of the three axes together, by node blocks (solver/implicit_matrix.hpp),
+  // where its factor is small enough; per block, each axis's unknown.
+  std::shared_ptr<const BlockFactor> coupled;
+  std::vector<std::array<int, 3>> block_unknown;
   // Per axis, unknowns long: the residual and the correction.
   std::array<Eigen::VectorXd, 3> residual, correction;
   // The solves' right-hand sides, row by row in the factor's order (solver/implicit_step.cpp).
   std::vector<double> block;
-  // Per volume constraint and axis: its gradient over the unknowns and P^-1 times it.
+  // Per volume constraint and axis: its gradient over the unknowns and P^-1 times it (or,
+  // with the coupled factor, times a gradient near it); the gradient at the rest shape and
+  // P^-1 times it, solved with the coupled factor.
   std::vector<std::array<Eigen::VectorXd, 3>> gradient, solved_gradient;
+  std::vector<std::array<Eigen::VectorXd, 3>> rest_gradient, rest_solved;
   // Frictionless obstacles (solver/implicit_contacts.cpp): the nodes an obstacle pushes this
   // iteration and the way it pushes, each a constraint push . dx = 0 of the global solve.
   struct Contact {

@@ -1,0 +1,182 @@
+#include "model/block_cholesky.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <Eigen/OrderingMethods>
+#include <Eigen/SparseCore>
+#include <algorithm>
+#include <stdexcept>
+#include <utility>
+
+namespace phymul {
+namespace {
+
+// Lower entries by (col, row), duplicates summed.
+std::vector<BlockEntry> merged(std::vector<BlockEntry> entries) {
+  std::sort(entries.begin(), entries.end(), [](const BlockEntry& a, const BlockEntry& b) {
+    return a.col != b.col ? a.col < b.col : a.row < b.row;
+  });
+  std::vector<BlockEntry> out;
+  for (const BlockEntry& e : entries)
+    if (!out.empty() && out.back().row == e.row && out.back().col == e.col)
+      out.back().value += e.value;
+    else
+      out.push_back(e);
+  return out;
+}
+
+// Per block: its place in an approximate minimum degree order of the blocks' graph.
+std::vector<int> minimum_degree_order(int blocks, const std::vector<std::pair<int, int>>& pairs) {
+  std::vector<Eigen::Triplet<double>> pattern;
+  for (int b = 0; b < blocks; ++b) pattern.emplace_back(b, b, 1.0);
+  for (const auto& [p, q] : pairs) {
+    pattern.emplace_back(p, q, 1.0);
+    pattern.emplace_back(q, p, 1.0);
+  }
+  Eigen::SparseMatrix<double> graph(blocks, blocks);
+  graph.setFromTriplets(pattern.begin(), pattern.end());
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> inverse;
+  Eigen::AMDOrdering<int>()(graph, inverse);
+  const Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order = inverse.inverse();
+  return {order.indices().data(), order.indices().data() + order.size()};
+}
+
+// The entries in the factor's order, lower triangle, by (col, row).
+std::vector<BlockEntry> permuted(std::vector<BlockEntry> entries, const std::vector<int>& to) {
+  for (BlockEntry& e : entries) {
+    e.row = to[size_t(e.row)];
+    e.col = to[size_t(e.col)];
+    if (e.row < e.col) {
+      std::swap(e.row, e.col);
+      e.value.transposeInPlace();
+    }
+  }
+  return merged(std::move(entries));
+}
+
+// The rows of L below the diagonal, column by column (f.start, f.row): column j's are A's
+// below j (a_row[a_start[j]...]) and those of its children in the elimination tree, but j.
+// Stops past `most`.
+void analyse(const std::vector<int>& a_row, const std::vector<int>& a_start, size_t most,
+             BlockFactor& f) {
+  const int n = f.blocks;
+  std::vector<std::vector<int>> children(static_cast<size_t>(n));
+  std::vector<int> mark(size_t(n), -1), rows;
+  f.start.assign(size_t(n) + 1, 0);
+  f.row.clear();
+  for (int j = 0; j < n; ++j) {
+    rows.clear();
+    auto add = [&](int i) {
+      if (i > j && mark[size_t(i)] != j) {
+        mark[size_t(i)] = j;
+        rows.push_back(i);
+      }
+    };
+    for (int e = a_start[size_t(j)]; e < a_start[size_t(j) + 1]; ++e) add(a_row[size_t(e)]);
+    for (int c : children[size_t(j)])
+      for (int e = f.start[size_t(c)]; e < f.start[size_t(c) + 1]; ++e) add(f.row[size_t(e)]);
+    std::sort(rows.begin(), rows.end());
+    if (!rows.empty()) children[size_t(rows.front())].push_back(j);
+    f.row.insert(f.row.end(), rows.begin(), rows.end());
+    f.start[size_t(j) + 1] = int(f.row.size());
+    if (f.row.size() > most) return;
+  }
+}
+
+// Per row i, the columns k < i with a block of L at (i, k), ascending (compressed rows).
+void row_lists(const BlockFactor& f, std::vector<int>& start, std::vector<int>& column) {
+  start.assign(size_t(f.blocks) + 1, 0);
+  for (int i : f.row) ++start[size_t(i) + 1];
+  for (int i = 0; i < f.blocks; ++i) start[size_t(i) + 1] += start[size_t(i)];
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  column.resize(f.row.size());
+  for (int k = 0; k < f.blocks; ++k)
+    for (int e = f.start[size_t(k)]; e < f.start[size_t(k) + 1]; ++e)
+      column[size_t(fill[size_t(f.row[size_t(e)])]++)] = k;
+}
+
+// Left-looking: column j of L from A's and the updates of the columns k < j that reach row j.
+void factorise_numeric(const std::vector<BlockEntry>& a, const std::vector<int>& a_start,
+                       BlockFactor& f) {
+  const int n = f.blocks;
+  std::vector<int> row_start, row_column;
+  row_lists(f, row_start, row_column);
+  std::vector<int> next(f.start.begin(), f.start.end() - 1);  // per column: its first row >= j
+  std::vector<Block3> sum(size_t(n), Block3::Zero());
+  f.value.assign(f.row.size(), Block3::Zero());
+  f.inverse_diagonal.assign(size_t(n), Block3::Zero());
+  for (int j = 0; j < n; ++j) {
+    sum[size_t(j)].setZero();
+    for (int e = f.start[size_t(j)]; e < f.start[size_t(j) + 1]; ++e)
+      sum[size_t(f.row[size_t(e)])].setZero();
+    for (int e = a_start[size_t(j)]; e < a_start[size_t(j) + 1]; ++e)
+      sum[size_t(a[size_t(e)].row)] += a[size_t(e)].value;
+    for (int r = row_start[size_t(j)]; r < row_start[size_t(j) + 1]; ++r) {
+      const int k = row_column[size_t(r)];
+      const int first = next[size_t(k)]++;
+      const Block3 ljk = f.value[size_t(first)];
+      for (int e = first; e < f.start[size_t(k) + 1]; ++e)
+        sum[size_t(f.row[size_t(e)])].noalias() -= f.value[size_t(e)] * ljk.transpose();
+    }
+    const Eigen::LLT<Block3> diagonal(sum[size_t(j)]);
+    if (diagonal.info() != Eigen::Success)
+      throw std::runtime_error("the implicit step's matrix is not positive definite");
+    const Block3 inverse = Block3(diagonal.matrixL()).inverse();
+    f.inverse_diagonal[size_t(j)] = inverse;
+    for (int e = f.start[size_t(j)]; e < f.start[size_t(j) + 1]; ++e)
+      f.value[size_t(e)] = sum[size_t(f.row[size_t(e)])] * inverse.transpose();
+  }
+}
+
+}  // namespace
+
+BlockFactor analyse_blocks(int blocks, const std::vector<std::pair<int, int>>& pairs, size_t most) {
+  BlockFactor f;
+  f.blocks = blocks;
+  f.position = minimum_degree_order(blocks, pairs);
+  std::vector<std::pair<int, int>> lower;  // (col, row) in the factor's order, row > col
+  for (const auto& [p, q] : pairs) {
+    const int r = f.position[size_t(p)], c = f.position[size_t(q)];
+    if (r != c) lower.emplace_back(std::min(r, c), std::max(r, c));
+  }
+  std::sort(lower.begin(), lower.end());
+  lower.erase(std::unique(lower.begin(), lower.end()), lower.end());
+  std::vector<int> a_start(size_t(blocks) + 1, 0), a_row;
+  for (const auto& [c, r] : lower) {
+    ++a_start[size_t(c) + 1];
+    a_row.push_back(r);
+  }
+  for (int j = 0; j < blocks; ++j) a_start[size_t(j) + 1] += a_start[size_t(j)];
+  analyse(a_row, a_start, most, f);
+  return f;
+}
+
+void factorise_blocks(BlockFactor& f, std::vector<BlockEntry> entries) {
+  const std::vector<BlockEntry> a = permuted(std::move(entries), f.position);
+  std::vector<int> a_start(size_t(f.blocks) + 1, 0);
+  for (const BlockEntry& e : a) ++a_start[size_t(e.col) + 1];
+  for (int j = 0; j < f.blocks; ++j) a_start[size_t(j) + 1] += a_start[size_t(j)];
+  factorise_numeric(a, a_start, f);
+}
+
+void solve_blocks(const BlockFactor& f, double* x) {
+  using Map3 = Eigen::Map<Eigen::Vector3d>;
+  const int n = f.blocks;
+  const int* __restrict start = f.start.data();
+  const int* __restrict row = f.row.data();
+  const Block3* __restrict value = f.value.data();
+  for (int j = 0; j < n; ++j) {  // L y = x
+    Map3 xj(x + 3 * j);
+    const Eigen::Vector3d yj = f.inverse_diagonal[size_t(j)] * xj;
+    xj = yj;
+    for (int e = start[j]; e < start[j + 1]; ++e) Map3(x + 3 * row[e]).noalias() -= value[e] * yj;
+  }
+  for (int j = n - 1; j >= 0; --j) {  // L^T x = y
+    Eigen::Vector3d xj = Map3(x + 3 * j);
+    for (int e = start[j]; e < start[j + 1]; ++e)
+      xj.noalias() -= value[e].transpose() * Map3(x + 3 * row[e]);
+    Map3(x + 3 * j) = f.inverse_diagonal[size_t(j)].transpose() * xj;
+  }
+}
+
+}  // namespace phymul

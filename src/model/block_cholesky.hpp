@@ -1,0 +1,45 @@
+// A sparse symmetric positive definite matrix of 3x3 blocks (a node's three axes each),
+// factorised L L^T block by block in a fill-reducing order (approximate minimum degree on the
+// blocks' graph): the implicit step's coupled matrix (solver/implicit_step.cpp). Each block
+// product is a 3x3 one, where a scalar factor of the same matrix would index every entry.
+#pragma once
+
+#include <Eigen/Core>
+#include <utility>
+#include <vector>
+
+namespace phymul {
+
+using Block3 = Eigen::Matrix3d;
+
+// The matrix's lower triangle and diagonal, by block: (row, col, value) with row >= col.
+struct BlockEntry {
+  int row = 0, col = 0;
+  Block3 value = Block3::Zero();
+};
+
+struct BlockFactor {
+  int blocks = 0;
+  std::vector<int> position;  // per block: its place in the factor's order
+  // Column j of L in the factor's order: the inverse of its diagonal block (lower
+  // triangular), then its blocks below the diagonal at rows row[e], e in [start[j],
+  // start[j + 1]).
+  std::vector<Block3> inverse_diagonal;
+  std::vector<int> start, row;
+  std::vector<Block3> value;
+};
+
+// The order and L's structure for a matrix of `blocks` blocks coupled by `pairs` (either
+// way round); stops once L holds more than `most` blocks below the diagonal (then its
+// f.row.size() > most, and it cannot be factorised).
+BlockFactor analyse_blocks(int blocks, const std::vector<std::pair<int, int>>& pairs, size_t most);
+
+// L's values for the analysed structure from the matrix's lower entries (duplicates summed;
+// each within the analysed pairs or on the diagonal). Throws std::runtime_error when the
+// matrix is not positive definite.
+void factorise_blocks(BlockFactor& f, std::vector<BlockEntry> entries);
+
+// x = A^-1 x in place, x three values a block in the factor's order (block j's at x + 3 j).
+void solve_blocks(const BlockFactor& f, double* x);
+
+}  // namespace phymul

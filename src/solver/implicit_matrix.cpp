@@ -1,0 +1,163 @@
+#include "solver/implicit_matrix.hpp"
+
+#include <Eigen/Cholesky>
+#include <utility>
+
+#include "model/neighbourhood.hpp"
+
+namespace phymul {
+namespace {
+
+Block3 cross_matrix(const Vec3& v) {
+  Block3 m;
+  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return m;
+}
+
+// One memory node's pull derivative: per node it reads, d(pull)/d(x_node).
+using Jacobian = std::vector<std::pair<int, Block3>>;
+
+// d(normal) / d(x_j) at rest, per neighbour (position in the row), of the neighbourhood's
+// unnormalised normal N (model/neighbourhood.hpp): the ring's sum of e_r x e_r+1 (its
+// centroid terms cancel), or a flat interior node's pair (x_a - g) x (x_b - g).
+std::vector<Block3> normal_derivative(const ShapeMemory& m, int k, std::span<const Vec3> rest,
+                                      const Vec3& g0) {
+  const auto nb = m.neighbours.row(k);
+  const int count = int(nb.size());
+  std::vector<Block3> d(size_t(count), Block3::Zero());
+  auto e = [&](int r) { return Vec3(rest[size_t(nb[size_t(r)])] - g0); };
+  if (m.surface) {
+    for (int r = 0; r < count; ++r)
+      d[size_t(r)] = -cross_matrix(e((r + 1) % count) - e((r + count - 1) % count));
+    return d;
+  }
+  const std::array<int, 2>& pair = frame_pair(m, k);
+  const Block3 through_centroid = (cross_matrix(e(pair[1])) - cross_matrix(e(pair[0]))) / count;
+  for (int r = 0; r < count; ++r) d[size_t(r)] = through_centroid;
+  d[size_t(pair[0])] -= cross_matrix(e(pair[1]));
+  d[size_t(pair[1])] += cross_matrix(e(pair[0]));
+  return d;
+}
+
+// d(pull)/dx at rest for memory node k: through the centroid g, and in polar mode with the
+// reaction (the forces then the energy's gradient) through the fit's rotation, whose turn is
+// theta = (tr S - S)^-1 (sum r_j x dx_j + w n0 x dN / |N|) with S = sum r_j r_j^T (+ w n0 n0^T).
+Jacobian pull_derivative(const ShapeMemory& m, int k, std::span<const Vec3> rest) {
+  const auto nb = m.neighbours.row(k);
+  const int count = int(nb.size());
+  Jacobian j;
+  j.emplace_back(m.nodes[size_t(k)], -Block3::Identity());
+  for (int r : nb) j.emplace_back(r, Block3::Identity() / count);
+  if (m.frame != FrameMode::polar || !m.reaction) return j;
+  const Vec3 g0 = centroid(nb, rest);
+  const Vec3 c = rest[size_t(m.nodes[size_t(k)])] - g0;
+  Block3 S = Block3::Zero();
+  for (int r : nb) S += (rest[size_t(r)] - g0) * (rest[size_t(r)] - g0).transpose();
+  const double weight = normal_weight(m, k);
+  Vec3 n0 = Vec3::Zero();
+  double length = 0.0;
+  if (weight > 0.0 && count > 2) {
+    const Vec3 N = neighbourhood_normal(m, k, rest, g0);
+    length = N.norm();
+    n0 = N / length;
+    S += weight * n0 * n0.transpose();
+  }
+  const Eigen::LLT<Block3> turn(S.trace() * Block3::Identity() - S);
+  if (turn.info() != Eigen::Success) return j;  // collinear neighbours: no rotation to fit
+  const Block3 through_turn = -cross_matrix(c) * turn.solve(Block3::Identity());
+  std::vector<Block3> dn;
+  if (length > 0.0) dn = normal_derivative(m, k, rest, g0);
+  for (int r = 0; r < count; ++r) {
+    Block3 b = cross_matrix(rest[size_t(nb[size_t(r)])] - g0);
+    if (length > 0.0) b += weight / length * cross_matrix(n0) * dn[size_t(r)];
+    j[size_t(r) + 1].second += through_turn * b;
+  }
+  return j;
+}
+
+// Adds K J^T J: the pairs of blocks at or below the diagonal.
+void add_memory_node(const Jacobian& j, double stiffness, const ImplicitBlocks& blocks,
+                     std::vector<BlockEntry>& out) {
+  for (const auto& [p, jp] : j) {
+    const int bp = blocks.of_node[size_t(p)];
+    if (bp < 0) continue;
+    for (const auto& [q, jq] : j) {
+      const int bq = blocks.of_node[size_t(q)];
+      if (bq < 0 || bp < bq) continue;
+      out.push_back({bp, bq, stiffness * jp.transpose() * jq});
+    }
+  }
+}
+
+// The held axes' rows and columns zero, their diagonal one: decoupled unknowns that stay 0.
+void hold_axes(const ImplicitBlocks& blocks, std::vector<BlockEntry>& entries) {
+  for (BlockEntry& e : entries)
+    for (int a = 0; a < 3; ++a) {
+      if (blocks.unknown[size_t(e.row)][size_t(a)] < 0) e.value.row(a).setZero();
+      if (blocks.unknown[size_t(e.col)][size_t(a)] < 0) e.value.col(a).setZero();
+    }
+  for (int b = 0; b < int(blocks.unknown.size()); ++b) {
+    Block3 one = Block3::Zero();
+    for (int a = 0; a < 3; ++a)
+      if (blocks.unknown[size_t(b)][size_t(a)] < 0) one(a, a) = 1.0;
+    entries.push_back({b, b, one});
+  }
+}
+
+}  // namespace
+
+ImplicitBlocks number_blocks(const Model& model, const std::array<std::vector<int>, 3>& unknown) {
+  const int n = model.node_count();
+  std::vector<int> group(size_t(n), -1), of_group(size_t(model.doubled.rows()), -1);
+  for (int g = 0; g < model.doubled.rows(); ++g)
+    for (int i : model.doubled.row(g)) group[size_t(i)] = g;
+  ImplicitBlocks b;
+  b.of_node.assign(size_t(n), -1);
+  for (int i = 0; i < n; ++i) {
+    const std::array<int, 3> u{unknown[0][size_t(i)], unknown[1][size_t(i)], unknown[2][size_t(i)]};
+    if (u[0] < 0 && u[1] < 0 && u[2] < 0) continue;
+    const int g = group[size_t(i)];
+    if (g >= 0 && of_group[size_t(g)] >= 0) {
+      b.of_node[size_t(i)] = of_group[size_t(g)];
+      continue;
+    }
+    b.of_node[size_t(i)] = int(b.unknown.size());
+    if (g >= 0) of_group[size_t(g)] = b.of_node[size_t(i)];
+    b.unknown.push_back(u);
+  }
+  return b;
+}
+
+std::vector<std::pair<int, int>> coupled_pattern(const Model& model, const ImplicitBlocks& blocks) {
+  std::vector<std::pair<int, int>> pairs;
+  std::vector<int> read;
+  for (const ShapeMemory& m : model.shape_memory)
+    for (int k = 0; k < int(m.nodes.size()); ++k) {
+      read.assign(1, blocks.of_node[size_t(m.nodes[size_t(k)])]);
+      for (int j : m.neighbours.row(k)) read.push_back(blocks.of_node[size_t(j)]);
+      for (int p : read)
+        for (int q : read)
+          if (q >= 0 && p > q) pairs.emplace_back(p, q);
+    }
+  return pairs;
+}
+
+std::vector<BlockEntry> coupled_matrix(const Model& model, const ImplicitBlocks& blocks, double h) {
+  std::vector<BlockEntry> entries;
+  const double per_mass = 1.0 / (h * h) + model.damping / h;
+  for (int i = 0; i < model.node_count(); ++i)
+    if (const int b = blocks.of_node[size_t(i)]; b >= 0)
+      entries.push_back({b, b, model.inertia[size_t(i)] * per_mass * Block3::Identity()});
+  for (const ShapeMemory& m : model.shape_memory)
+    for (int k = 0; k < int(m.nodes.size()); ++k)
+      add_memory_node(pull_derivative(m, k, model.rest_position), m.stiffness, blocks, entries);
+  // A spring support is linear: its stiffness is exact on the diagonal.
+  for (const SpringSupport& springs : model.springs)
+    for (int i : springs.nodes)
+      if (const int b = blocks.of_node[size_t(i)]; b >= 0)
+        entries.push_back({b, b, springs.stiffness * Block3::Identity()});
+  hold_axes(blocks, entries);
+  return entries;
+}
+
+}  // namespace phymul
