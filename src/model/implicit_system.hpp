@@ -35,6 +35,7 @@ struct ImplicitSystem {
   // where its factor is small enough; per block, each axis's unknown.
   std::shared_ptr<const BlockFactor> coupled;
   std::vector<std::array<int, 3>> block_unknown;
+  std::vector<int> block_of_node;  // -1: every axis held
   // Per axis, unknowns long: the residual and the correction.
   std::array<Eigen::VectorXd, 3> residual, correction;
   // The solves' right-hand sides, row by row in the factor's order (solver/implicit_step.cpp).
@@ -50,18 +51,32 @@ struct ImplicitSystem {
     int node = 0;
     Eigen::Vector3d push = Eigen::Vector3d::Zero();
     double gap = 0.0;  // m, along push: how far the node is clear of the surface
+    int obstacle = 0;
+    double into = 0.0;  // N: the residual's push along it (< 0: into the obstacle)
   };
   std::vector<Contact> active;
-  std::vector<double> touching_gap;  // per Workspace::contacts entry: its gap
+  std::vector<double> touching_gap;    // per Workspace::contacts entry: its gap
+  std::vector<int> touching_obstacle;  // and its obstacle
   // Columns of P^-1 at those nodes' unknowns, kept while the factor is: per axis owning a
   // factor (owner: the first axis sharing it), each unknown's slot (-1: none) and the slots.
+  // With the coupled factor, in axis 0's: each block's slot, three columns (its axes) a slot,
+  // each in the factor's order.
   std::array<int, 3> owner{0, 1, 2};
   std::array<std::vector<int>, 3> column_slot;
   std::array<std::vector<double>, 3> columns;
   std::array<int, 3> columns_used{0, 0, 0};
+  std::unique_ptr<double[]> coupled_columns;  // uninitialised: pages touched as slots fill
   int column_capacity = 0;
-  // The Schur complement of volumes and contacts, row-major, and its right-hand side.
-  std::vector<double> schur, rhs;
+  // The Schur complement of volumes and contacts, row-major, and its right-hand side; the
+  // whole system (all touching nodes) and its right-hand side, from which the solves of the
+  // contacts still held are taken; per touching node whether it is held, and its multiplier.
+  std::vector<double> schur, rhs, system, system_rhs;
+  std::vector<char> held;
+  std::vector<double> multiplier;
+  std::vector<int> rows;  // the system's rows the solve takes
+  // Per node, the obstacle the step's last solve held it against (-1: none): it stays a
+  // constraint, on the surface or not, until its multiplier releases it.
+  std::vector<int> held_by;
   // The last step: global solves taken, and the largest residual nodal force (N) at its end.
   int iterations = 0;
   double residual_force = 0.0;

@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "model/block_cholesky.hpp"
 #include "solver/implicit_solve.hpp"
 
 namespace phymul {
@@ -12,6 +13,8 @@ namespace {
 
 // Most nodes touching obstacles at once: columns of P^-1 kept per factor (each unknowns long).
 constexpr int kMaxContactColumns = 512;
+// Most values the coupled factor's column cache holds (256 MB): 9 blocks' worth a node.
+constexpr size_t kMostColumnValues = size_t(1) << 25;
 
 // The column of P_a^-1 at unknown u, unknowns long, in the owner axis's cache (which must
 // have it: ensure_columns).
@@ -35,13 +38,61 @@ void compute_column(ImplicitSystem& s, int o, int u) {
   s.column_slot[size_t(o)][size_t(u)] = slot;
 }
 
-// Every active contact's columns in the caches; a full cache starts again empty.
-void ensure_columns(ImplicitSystem& s) {
+// Values a coupled slot holds: the three columns of P^-1 at a block, each 3 blocks long.
+size_t coupled_slot_size(const ImplicitSystem& s) { return 9 * size_t(s.coupled->blocks); }
+
+// P^-1 at block b's axes into a free slot: one solve for each free axis (a held axis's
+// column is never read).
+void compute_coupled_columns(ImplicitSystem& s, int b) {
+  const BlockFactor& f = *s.coupled;
+  const size_t width = 3 * size_t(f.blocks);
+  const int slot = s.columns_used[0]++;
+  double* out = s.coupled_columns.get() + size_t(slot) * coupled_slot_size(s);
+  for (int a = 0; a < 3; ++a) {
+    if (s.block_unknown[size_t(b)][size_t(a)] < 0) continue;
+    double* x = out + size_t(a) * width;
+    std::fill(x, x + width, 0.0);
+    x[3 * f.position[size_t(b)] + a] = 1.0;
+    solve_blocks(f, x);
+  }
+  s.column_slot[0][size_t(b)] = slot;
+}
+
+// With the coupled factor: P^-1's column at node i's axis a, in the factor's order.
+const double* coupled_column(const ImplicitSystem& s, int i, int a) {
+  const int slot = s.column_slot[0][size_t(s.block_of_node[size_t(i)])];
+  return s.coupled_columns.get() + size_t(slot) * coupled_slot_size(s) +
+         size_t(a) * 3 * size_t(s.coupled->blocks);
+}
+
+void check_capacity(const ImplicitSystem& s) {
   if (int(s.active.size()) > s.column_capacity)
     throw std::runtime_error(
         "the implicit step holds at most " + std::to_string(s.column_capacity) +
         " nodes against obstacles at once; " + std::to_string(s.active.size()) +
         " touch now: use 'integrator: verlet'");
+}
+
+// The coupled factor's columns for every touching node's block; a full cache starts again.
+void ensure_coupled_columns(ImplicitSystem& s) {
+  std::vector<int>& slot = s.column_slot[0];
+  int missing = 0;
+  for (const ImplicitSystem::Contact& c : s.active)
+    if (slot[size_t(s.block_of_node[size_t(c.node)])] < 0) ++missing;
+  if (missing == 0) return;
+  if (s.columns_used[0] + missing > s.column_capacity) {
+    std::fill(slot.begin(), slot.end(), -1);
+    s.columns_used[0] = 0;
+  }
+  for (const ImplicitSystem::Contact& c : s.active)
+    if (const int b = s.block_of_node[size_t(c.node)]; slot[size_t(b)] < 0)
+      compute_coupled_columns(s, b);
+}
+
+// Every active contact's columns in the caches; a full cache starts again empty.
+void ensure_columns(ImplicitSystem& s) {
+  check_capacity(s);
+  if (s.coupled) return ensure_coupled_columns(s);
   for (int o = 0; o < 3; ++o) {
     if (s.owner[size_t(o)] != o) continue;
     std::vector<int>& slot = s.column_slot[size_t(o)];
@@ -70,9 +121,24 @@ double along(const ImplicitSystem& s, const ImplicitSystem::Contact& c,
   return sum;
 }
 
+// push_c^T P^-1 push_d over the free axes, the coupled factor's axes coupled.
+double coupled_coupling(const ImplicitSystem& s, const ImplicitSystem::Contact& c,
+                        const ImplicitSystem::Contact& d) {
+  const int at = 3 * s.coupled->position[size_t(s.block_of_node[size_t(d.node)])];
+  double sum = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    if (s.unknown[size_t(a)][size_t(c.node)] < 0) continue;
+    const double* col = coupled_column(s, c.node, a);
+    for (int b = 0; b < 3; ++b)
+      if (s.unknown[size_t(b)][size_t(d.node)] >= 0) sum += c.push[a] * d.push[b] * col[at + b];
+  }
+  return sum;
+}
+
 // push_c^T P^-1 push_d over the free axes.
 double coupling(const ImplicitSystem& s, const ImplicitSystem::Contact& c,
                 const ImplicitSystem::Contact& d) {
+  if (s.coupled) return coupled_coupling(s, c, d);
   double sum = 0.0;
   for (int a = 0; a < 3; ++a) {
     const int u = s.unknown[size_t(a)][size_t(c.node)], w = s.unknown[size_t(a)][size_t(d.node)];
@@ -114,10 +180,98 @@ double dot3(const std::array<Eigen::VectorXd, 3>& p, const std::array<Eigen::Vec
   return p[0].dot(q[0]) + p[1].dot(q[1]) + p[2].dot(q[2]);
 }
 
+// The coupled factor's column cache: slots for up to kMaxContactColumns blocks, within
+// kMostColumnValues values; left uninitialised, so only the slots used are ever touched.
+void prepare_coupled_columns(ImplicitSystem& s) {
+  const int blocks = s.coupled->blocks;
+  const size_t fit = kMostColumnValues / coupled_slot_size(s);
+  s.column_capacity =
+      int(std::max<size_t>(1, std::min({size_t(blocks), fit, size_t(kMaxContactColumns)})));
+  s.column_slot[0].assign(size_t(blocks), -1);
+  s.coupled_columns.reset(new double[size_t(s.column_capacity) * coupled_slot_size(s)]);
+}
+
+// The whole system of the volumes and every touching node, into s.system (row-major) and
+// s.system_rhs.
+void build_system(ImplicitSystem& s, int volumes, std::span<const double> volume_rate) {
+  const int contacts = int(s.active.size()), n = volumes + contacts;
+  double* S = s.system.data();
+  for (int l = 0; l < volumes; ++l) {
+    s.system_rhs[size_t(l)] = volume_rate[size_t(l)];
+    for (int m = 0; m <= l; ++m)
+      S[l * n + m] = S[m * n + l] = dot3(s.gradient[size_t(l)], s.solved_gradient[size_t(m)]);
+  }
+  for (int c = 0; c < contacts; ++c) {
+    const ImplicitSystem::Contact& cc = s.active[size_t(c)];
+    const int row = volumes + c;
+    s.system_rhs[size_t(row)] = along(s, cc, s.correction) + cc.gap;  // push . dx = -gap
+    for (int l = 0; l < volumes; ++l)
+      S[row * n + l] = S[l * n + row] = along(s, cc, s.solved_gradient[size_t(l)]);
+    for (int d = 0; d <= c; ++d)
+      S[row * n + volumes + d] = S[(volumes + d) * n + row] = coupling(s, cc, s.active[size_t(d)]);
+  }
+}
+
+// The multipliers of the volumes and the held contacts (0 for the released) into
+// s.multiplier, from the system's rows and columns they take.
+void solve_held(ImplicitSystem& s, int volumes) {
+  const int contacts = int(s.active.size()), n = volumes + contacts;
+  int m = 0;
+  for (int r = 0; r < n; ++r)
+    if (r < volumes || s.held[size_t(r - volumes)]) s.rows[size_t(m++)] = r;
+  for (int i = 0; i < m; ++i) {
+    const int r = s.rows[size_t(i)];
+    s.rhs[size_t(i)] = s.system_rhs[size_t(r)];
+    for (int j = 0; j < m; ++j)
+      s.schur[size_t(i * m + j)] = s.system[size_t(r * n + s.rows[size_t(j)])];
+  }
+  solve_dense(s.schur.data(), s.rhs.data(), m);
+  std::fill(s.multiplier.begin(), s.multiplier.begin() + n, 0.0);
+  for (int i = 0; i < m; ++i) s.multiplier[size_t(s.rows[size_t(i)])] = s.rhs[size_t(i)];
+}
+
+// Solves with the held contacts and releases those whose multiplier pulls their node into
+// the obstacle (the reaction -mu push tensile: mu > 0); whether any was released. Only the
+// multiplier's sign decides: the residual's own sign at a touching node lags the solve by
+// one iteration, and by it a lone node alternated between held and released for ever.
+bool release_tensile(ImplicitSystem& s, int volumes) {
+  solve_held(s, volumes);
+  bool released = false;
+  for (int c = 0; c < int(s.active.size()); ++c)
+    if (s.held[size_t(c)] && s.multiplier[size_t(volumes + c)] > 0.0 &&
+        s.active[size_t(c)].into >= 0.0) {
+      s.held[size_t(c)] = 0;
+      released = true;
+    }
+  return released;
+}
+
+// correction -= mu P^-1 push at the contact's node.
+void subtract_column(ImplicitSystem& s, const ImplicitSystem::Contact& cc, double mu) {
+  for (int a = 0; a < 3; ++a) {
+    const int u = s.unknown[size_t(a)][size_t(cc.node)];
+    if (u < 0 || cc.push[a] == 0.0) continue;
+    const double scale = mu * cc.push[a];
+    if (s.coupled) {
+      const double* col = coupled_column(s, cc.node, a);
+      const BlockFactor& f = *s.coupled;
+      for (int b = 0; b < f.blocks; ++b)
+        for (int k = 0; k < 3; ++k)
+          if (const int v = s.block_unknown[size_t(b)][size_t(k)]; v >= 0)
+            s.correction[size_t(k)][v] -= scale * col[3 * f.position[size_t(b)] + k];
+      continue;
+    }
+    const double* col = column(s, a, u);
+    Eigen::VectorXd& out = s.correction[size_t(a)];
+    for (int v = 0; v < int(out.size()); ++v) out[v] -= scale * col[v];
+  }
+}
+
 }  // namespace
 
 void prepare_implicit_contacts(const Model& model, ImplicitSystem& s) {
   s.active.clear();
+  s.coupled_columns.reset();
   for (int a = 0; a < 3; ++a) {
     s.owner[size_t(a)] = a;
     for (int b = 0; b < a; ++b)
@@ -130,57 +284,50 @@ void prepare_implicit_contacts(const Model& model, ImplicitSystem& s) {
     s.columns_used[size_t(a)] = 0;
   }
   if (model.obstacles.empty()) return;
-  int most = 0;
-  for (int a = 0; a < 3; ++a) most = std::max(most, s.unknowns[size_t(a)]);
-  s.column_capacity = std::min(most, kMaxContactColumns);
-  for (int a = 0; a < 3; ++a) {
-    if (s.owner[size_t(a)] != a) continue;
-    s.column_slot[size_t(a)].assign(size_t(s.unknowns[size_t(a)]), -1);
-    s.columns[size_t(a)].resize(size_t(s.column_capacity) * size_t(s.unknowns[size_t(a)]));
+  if (s.coupled) {
+    prepare_coupled_columns(s);
+  } else {
+    int most = 0;
+    for (int a = 0; a < 3; ++a) most = std::max(most, s.unknowns[size_t(a)]);
+    s.column_capacity = std::min(most, kMaxContactColumns);
+    for (int a = 0; a < 3; ++a) {
+      if (s.owner[size_t(a)] != a) continue;
+      s.column_slot[size_t(a)].assign(size_t(s.unknowns[size_t(a)]), -1);
+      s.columns[size_t(a)].resize(size_t(s.column_capacity) * size_t(s.unknowns[size_t(a)]));
+    }
   }
   s.active.reserve(size_t(model.node_count()));
   s.touching_gap.reserve(size_t(model.node_count()) * model.obstacles.size());
+  s.touching_obstacle.reserve(s.touching_gap.capacity());
   const size_t n = model.volumes.size() + size_t(s.column_capacity);
   s.schur.resize(n * n);
   s.rhs.resize(n);
+  s.system.resize(n * n);
+  s.system_rhs.resize(n);
+  s.multiplier.resize(n);
+  s.rows.resize(n);
+  s.held.resize(size_t(s.column_capacity));
+  s.held_by.assign(size_t(model.node_count()), -1);
 }
 
 void constrain_to_contacts(const Model& model, ImplicitSystem& s,
                            std::span<const double> volume_rate) {
   ensure_columns(s);
   const int volumes = int(model.volumes.size()), contacts = int(s.active.size());
-  const int n = volumes + contacts;
-  double* S = s.schur.data();
-  for (int l = 0; l < volumes; ++l) {
-    s.rhs[size_t(l)] = volume_rate[size_t(l)];
-    for (int m = 0; m <= l; ++m)
-      S[l * n + m] = S[m * n + l] = dot3(s.gradient[size_t(l)], s.solved_gradient[size_t(m)]);
+  build_system(s, volumes, volume_rate);
+  std::fill(s.held.begin(), s.held.begin() + contacts, char(1));
+  while (release_tensile(s, volumes)) {
   }
   for (int c = 0; c < contacts; ++c) {
     const ImplicitSystem::Contact& cc = s.active[size_t(c)];
-    const int row = volumes + c;
-    s.rhs[size_t(row)] = along(s, cc, s.correction) + cc.gap;  // push . dx = -gap: onto it
-    for (int l = 0; l < volumes; ++l)
-      S[row * n + l] = S[l * n + row] = along(s, cc, s.solved_gradient[size_t(l)]);
-    for (int d = 0; d <= c; ++d)
-      S[row * n + volumes + d] = S[(volumes + d) * n + row] = coupling(s, cc, s.active[size_t(d)]);
+    s.held_by[size_t(cc.node)] = s.held[size_t(c)] ? cc.obstacle : -1;
   }
-  solve_dense(S, s.rhs.data(), n);
   for (int l = 0; l < volumes; ++l)
     for (int a = 0; a < 3; ++a)
-      s.correction[size_t(a)] -= s.rhs[size_t(l)] * s.solved_gradient[size_t(l)][size_t(a)];
-  for (int c = 0; c < contacts; ++c) {
-    const ImplicitSystem::Contact& cc = s.active[size_t(c)];
-    const double mu = s.rhs[size_t(volumes + c)];
-    for (int a = 0; a < 3; ++a) {
-      const int u = s.unknown[size_t(a)][size_t(cc.node)];
-      if (u < 0 || cc.push[a] == 0.0) continue;
-      const double* col = column(s, a, u);
-      Eigen::VectorXd& out = s.correction[size_t(a)];
-      const double scale = mu * cc.push[a];
-      for (int v = 0; v < int(out.size()); ++v) out[v] -= scale * col[v];
-    }
-  }
+      s.correction[size_t(a)] -= s.multiplier[size_t(l)] * s.solved_gradient[size_t(l)][size_t(a)];
+  for (int c = 0; c < contacts; ++c)
+    if (const double mu = s.multiplier[size_t(volumes + c)]; mu != 0.0)
+      subtract_column(s, s.active[size_t(c)], mu);
 }
 
 }  // namespace phymul

@@ -155,11 +155,8 @@ std::shared_ptr<const ImplicitFactor> factorise(const Eigen::SparseMatrix<double
 }
 
 // The three axes' coupled factor (solver/implicit_matrix.hpp) when L holds at most
-// kMostCoupledBlocks blocks and nothing meets an obstacle; false (nothing set) otherwise.
-// Against an obstacle its larger corrections make a touching node alternate between held
-// and released (the rigid probe's static solve stalled at 0.02 N): the per-axis factors then.
+// kMostCoupledBlocks blocks; false (nothing set) otherwise.
 bool factorise_coupled(const Model& model, ImplicitSystem& s, double h) {
-  if (!model.obstacles.empty()) return false;
   const ImplicitBlocks blocks = number_blocks(model, s.unknown);
   const int count = int(blocks.unknown.size());
   BlockFactor f = analyse_blocks(count, coupled_pattern(model, blocks), kMostCoupledBlocks);
@@ -167,6 +164,7 @@ bool factorise_coupled(const Model& model, ImplicitSystem& s, double h) {
   factorise_blocks(f, coupled_matrix(model, blocks, h));
   s.coupled = std::make_shared<const BlockFactor>(std::move(f));
   s.block_unknown = blocks.unknown;
+  s.block_of_node = blocks.of_node;
   return true;
 }
 
@@ -223,6 +221,7 @@ void prepare(const Model& model, ImplicitSystem& s, double h) {
   refuse_unsupported(model);
   number_unknowns(model, s);
   s.coupled = nullptr;
+  s.block_of_node.clear();
   for (auto& f : s.factor) f = nullptr;
   if (!factorise_coupled(model, s, h)) factorise_axes(model, s, h);
   size_t most = 0;
@@ -348,6 +347,7 @@ void find_contacts(const Model& model, Data& d, double load_time) {
   Workspace& w = *d.work;
   w.contacts.clear();
   w.implicit.touching_gap.clear();
+  w.implicit.touching_obstacle.clear();
   std::fill(d.obstacle_touching.begin(), d.obstacle_touching.end(), -1);
   for (int k = 0; k < int(model.obstacles.size()); ++k) {
     const RigidObstacle& o = model.obstacles[size_t(k)];
@@ -355,9 +355,10 @@ void find_contacts(const Model& model, Data& d, double load_time) {
       const SurfaceDistance sd =
           obstacle_distance(o, d.controls.obstacle_motion[size_t(k)], d.x[size_t(i)], load_time);
       const double gap = o.keep_inside ? -sd.distance : sd.distance;
-      if (gap > kTouching) return;
+      if (gap > kTouching && w.implicit.held_by[size_t(i)] != k) return;
       w.contacts.push_back({i, o.keep_inside ? Vec3(-sd.normal) : sd.normal, 0.0});
       w.implicit.touching_gap.push_back(gap);
+      w.implicit.touching_obstacle.push_back(k);
       d.obstacle_touching[size_t(i)] = k;
     };
     if (o.nodes.empty())
@@ -408,9 +409,10 @@ void remove_reactions(const Model& model, Data& d, ImplicitSystem& s) {
   s.active.clear();
   for (size_t k = 0; k < contacts.size(); ++k) {
     const ObstacleContact& c = contacts[k];
+    // The solve decides whom it holds.
     const double into = node_value(s, s.residual, c.node).dot(c.push);
+    s.active.push_back({c.node, c.push, s.touching_gap[k], s.touching_obstacle[k], into});
     if (into >= 0.0) continue;  // pulled away: the obstacle holds nothing
-    s.active.push_back({c.node, c.push, s.touching_gap[k]});
     for (int a = 0; a < 3; ++a)
       if (const int u = s.unknown[size_t(a)][size_t(c.node)]; u >= 0)
         s.residual[size_t(a)][u] -= into * c.push[a];
@@ -521,6 +523,7 @@ void step_implicit(const Model& model, Data& d, double h, double load_time, int 
   }
   apply_position_constraints(model, d.controls, w, d.x, load_time, w.f_start);
   s.iterations = 0;
+  std::fill(s.held_by.begin(), s.held_by.end(), -1);  // each step decides afresh
   double alpha = 1.0, previous = std::numeric_limits<double>::infinity();
   for (;;) {
     compute_forces(model, d, load_time);  // the local step: each node's rotation
