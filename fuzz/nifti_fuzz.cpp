@@ -18,7 +18,8 @@ namespace {
 void check_image(const phymul::LabelImage& im) {
   const size_t count = size_t(im.dims[0]) * size_t(im.dims[1]) * size_t(im.dims[2]);
   const phymul::Vec3 mm = im.spacing() * 1e3;
-  bool ok = im.labels.size() == count && im.origin.allFinite() && im.axes.allFinite();
+  bool ok = im.labels.size() == count && im.origin.allFinite() && im.axes.allFinite() &&
+            im.origin.cwiseAbs().maxCoeff() * 1e3 <= phymul::kNiftiMaxOriginMm;
   for (int a = 0; a < 3; ++a)
     ok = ok && im.dims[size_t(a)] >= 1 && im.dims[size_t(a)] <= phymul::kNiftiMaxDim &&
          mm[a] > phymul::kNiftiMinVoxelMm && mm[a] < phymul::kNiftiMaxVoxelMm;

@@ -15,6 +15,8 @@ namespace phymul {
 inline constexpr int kNiftiMaxDim = 2048;                            // voxels along one axis
 inline constexpr long long kNiftiMaxVoxels = 512LL * 512LL * 512LL;  // in all
 inline constexpr double kNiftiMinVoxelMm = 1e-3, kNiftiMaxVoxelMm = 100.0;
+// Where the first voxel may lie from the scanner's origin: a body is within metres of it.
+inline constexpr double kNiftiMaxOriginMm = 1e5;
 
 // One NIfTI-1 single-file image (magic "n+1"), either byte order, gzip-compressed or not
 // (told by its first bytes, not its name). Voxel values must be whole numbers (uint8, int8,

@@ -195,6 +195,12 @@ void check_voxel_sizes(const LabelImage& image, const Reader& r, const char* sou
           fmt::format("voxel size along axis {} is {:g} mm (from the {}), expected between "
                       "{:g} and {:g} mm",
                       "ijk"[a], mm[a], source, kNiftiMinVoxelMm, kNiftiMaxVoxelMm));
+  const double origin_mm = image.origin.cwiseAbs().maxCoeff() * 1e3;
+  if (!(origin_mm <= kNiftiMaxOriginMm))
+    r.fail(
+        fmt::format("the first voxel lies {:g} mm from the scanner's origin (from the {}), "
+                    "expected within {:g} mm",
+                    origin_mm, source, kNiftiMaxOriginMm));
   const double det = image.axes.determinant() * 1e9;
   if (!(std::abs(det) > 1e-6 * mm.prod()))
     r.fail(fmt::format("the {} maps the voxel grid onto a plane (its axes are parallel)", source));

@@ -15,9 +15,16 @@ void TriangleHash::reserve(size_t triangles) {
   seen_.assign(buckets, 0);
 }
 
+// Cells beyond 2^52 (points far from the origin against the triangles' size, or not finite)
+// share the bounding cells: a broad phase may return more candidates, never fewer, and the
+// neighbours' indices (c +- 1) stay representable.
 TriangleHash::Cell TriangleHash::cell_of(const Vec3& p) const {
-  return {int64_t(std::floor(p.x() / cell_)), int64_t(std::floor(p.y() / cell_)),
-          int64_t(std::floor(p.z() / cell_))};
+  constexpr double kLimit = 4503599627370496.0;  // 2^52
+  const auto index = [&](double v) {
+    const double c = std::floor(v / cell_);
+    return int64_t(c >= -kLimit ? (c <= kLimit ? c : kLimit) : -kLimit);
+  };
+  return {index(p.x()), index(p.y()), index(p.z())};
 }
 
 uint32_t TriangleHash::bucket(const Cell& c) const {

@@ -49,6 +49,7 @@ save("nan_pixdim.nii", patch(patch(base(), 252, "2h", 1, 0), 84, "f", float("nan
 save("nan_srow.nii", patch(base(), 292, "f", float("nan")))
 save("absurd_voxel_size.nii", patch(base(), 280, "f", 500.0))
 save("tiny_voxel_size.nii", patch(base(), 280, "f", 1e-5))
+save("far_origin.nii", patch(base(), 292, "f", 1e9))  # srow_x[3]: 1000 km away
 save("parallel_axes.nii", patch(patch(base(), 284, "f", 0.6), 300, "f", 0.0))
 save("vox_offset_past_end.nii", patch(base(), 108, "f", 100000.0))
 save("vox_offset_in_header.nii", patch(base(), 108, "f", 100.0))
