@@ -1245,44 +1245,42 @@ std::vector<const Parameter*> section_parameters(std::string_view section) {
   return out;
 }
 
-std::string_view kind_name(Kind kind) {
-  switch (kind) {
-    case Kind::quantity:
-      return "quantity";
-    case Kind::vector:
-      return "vector";
-    case Kind::integer:
-      return "integer";
-    case Kind::integer_vector:
-      return "3 integers";
-    case Kind::boolean:
-      return "boolean";
-    case Kind::choice:
-      return "enum";
-    case Kind::name:
-      return "name";
-    case Kind::axes:
-      return "axes";
-    case Kind::selector:
-      return "node selector";
-    case Kind::schedule:
-      return "schedule";
-    case Kind::scalar_schedule:
-      return "scalar schedule";
-    case Kind::names:
-      return "list of names";
-    case Kind::integers:
-      return "list of whole numbers";
-    case Kind::list:
-      return "list of maps";
-    case Kind::map:
-      return "map";
-    case Kind::path:
-      return "file path";
-    case Kind::text:
-      return "text";
-  }
-  return "?";
+namespace {
+
+// Each kind's word for programs (SceneField::kind) and its wording in the reference.
+struct KindNames {
+  Kind kind;
+  std::string_view word, name;
+};
+constexpr KindNames kKindNames[] = {
+    {Kind::quantity, "quantity", "quantity"},
+    {Kind::vector, "vector", "vector"},
+    {Kind::integer, "integer", "integer"},
+    {Kind::integer_vector, "integer_vector", "3 integers"},
+    {Kind::integers, "integers", "list of whole numbers"},
+    {Kind::boolean, "boolean", "boolean"},
+    {Kind::choice, "choice", "enum"},
+    {Kind::name, "name", "name"},
+    {Kind::axes, "axes", "axes"},
+    {Kind::selector, "selector", "node selector"},
+    {Kind::schedule, "schedule", "schedule"},
+    {Kind::scalar_schedule, "scalar_schedule", "scalar schedule"},
+    {Kind::names, "names", "list of names"},
+    {Kind::list, "list", "list of maps"},
+    {Kind::map, "map", "map"},
+    {Kind::path, "path", "file path"},
+    {Kind::text, "text", "text"},
+};
+
+const KindNames& names_of(Kind kind) {
+  for (const KindNames& k : kKindNames)
+    if (k.kind == kind) return k;
+  throw std::logic_error("a parameter kind without its names");
 }
+
+}  // namespace
+
+std::string_view kind_name(Kind kind) { return names_of(kind).name; }
+std::string_view kind_word(Kind kind) { return names_of(kind).word; }
 
 }  // namespace phymul::io

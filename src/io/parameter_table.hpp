@@ -87,7 +87,8 @@ const Section* find_section(std::string_view name);
 const Parameter* find_parameter(std::string_view section, std::string_view name);
 std::vector<const Parameter*> section_parameters(std::string_view section);
 
-std::string_view kind_name(Kind kind);
+std::string_view kind_name(Kind kind);  // the reference's wording: "3 integers"
+std::string_view kind_word(Kind kind);  // a program's: "integer_vector" (SceneField::kind)
 
 // The fields of `needles` (parameter_table_needles.cpp), part of parameter_table().
 std::vector<Parameter> needle_parameters();

@@ -33,53 +33,11 @@ const io::Parameter& quantity(std::string_view section, std::string_view name) {
   return p;
 }
 
-// The kind as a program names it (io::kind_name is the reference's wording).
-std::string_view kind_word(io::Kind kind) {
-  using io::Kind;
-  switch (kind) {
-    case Kind::quantity:
-      return "quantity";
-    case Kind::vector:
-      return "vector";
-    case Kind::integer:
-      return "integer";
-    case Kind::integer_vector:
-      return "integer_vector";
-    case Kind::integers:
-      return "integers";
-    case Kind::boolean:
-      return "boolean";
-    case Kind::choice:
-      return "choice";
-    case Kind::name:
-      return "name";
-    case Kind::axes:
-      return "axes";
-    case Kind::selector:
-      return "selector";
-    case Kind::schedule:
-      return "schedule";
-    case Kind::scalar_schedule:
-      return "scalar_schedule";
-    case Kind::names:
-      return "names";
-    case Kind::list:
-      return "list";
-    case Kind::map:
-      return "map";
-    case Kind::path:
-      return "path";
-    case Kind::text:
-      return "text";
-  }
-  return "?";
-}
-
 SceneField field_of(const io::Parameter& p) {
   SceneField f;
   f.section = p.section;
   f.name = p.name;
-  f.kind = kind_word(p.kind);
+  f.kind = io::kind_word(p.kind);
   f.unit = io::dimension_info(p.dimension).si;
   f.range = p.range.str();
   for (const auto word : p.choices) f.choices.emplace_back(word);

@@ -35,10 +35,7 @@ std::vector<int> minimum_degree_order(int blocks, const std::vector<std::pair<in
   }
   Eigen::SparseMatrix<double> graph(blocks, blocks);
   graph.setFromTriplets(pattern.begin(), pattern.end());
-  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> inverse;
-  Eigen::AMDOrdering<int>()(graph, inverse);
-  const Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order = inverse.inverse();
-  return {order.indices().data(), order.indices().data() + order.size()};
+  return minimum_degree_positions(graph);
 }
 
 // The entries in the factor's order, lower triangle, by (col, row).
@@ -129,6 +126,13 @@ void factorise_numeric(const std::vector<BlockEntry>& a, const std::vector<int>&
 }
 
 }  // namespace
+
+std::vector<int> minimum_degree_positions(const Eigen::SparseMatrix<double>& symmetric) {
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> inverse;
+  Eigen::AMDOrdering<int>()(symmetric, inverse);
+  const Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order = inverse.inverse();
+  return {order.indices().data(), order.indices().data() + order.size()};
+}
 
 BlockFactor analyse_blocks(int blocks, const std::vector<std::pair<int, int>>& pairs, size_t most) {
   BlockFactor f;

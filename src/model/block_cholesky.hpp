@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <utility>
 #include <vector>
 
@@ -28,6 +29,10 @@ struct BlockFactor {
   std::vector<int> start, row;
   std::vector<Block3> value;
 };
+
+// Per row of a symmetric sparse matrix (both halves given), its place in Eigen's approximate
+// minimum degree order: the fill-reducing order of the implicit step's factors.
+std::vector<int> minimum_degree_positions(const Eigen::SparseMatrix<double>& symmetric);
 
 // The order and L's structure for a matrix of `blocks` blocks coupled by `pairs` (either
 // way round); stops once L holds more than `most` blocks below the diagonal (then its

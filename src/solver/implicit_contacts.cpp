@@ -230,10 +230,10 @@ void solve_held(ImplicitSystem& s, int volumes) {
   for (int i = 0; i < m; ++i) s.multiplier[size_t(s.rows[size_t(i)])] = s.rhs[size_t(i)];
 }
 
-// Solves with the held contacts and releases those whose multiplier pulls their node into
-// the obstacle (the reaction -mu push tensile: mu > 0); whether any was released. Only the
-// multiplier's sign decides: the residual's own sign at a touching node lags the solve by
-// one iteration, and by it a lone node alternated between held and released for ever.
+// Solves with the held contacts and releases those that both the multiplier (the reaction
+// -mu push tensile: mu > 0) and the residual (into >= 0: not pressed into the obstacle) let
+// go; whether any was released. Either sign alone cycles: by the multiplier's alone the
+// rigid probe's 50 mL run took 18 solves a step; the residual's lags the solve by one.
 bool release_tensile(ImplicitSystem& s, int volumes) {
   solve_held(s, volumes);
   bool released = false;

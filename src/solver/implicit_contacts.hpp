@@ -17,9 +17,9 @@ namespace phymul {
 void prepare_implicit_contacts(const Model& model, ImplicitSystem& s);
 
 // The correction P^-1 (r - G^T mu) with G the volumes' gradients and the touching nodes'
-// pushes (s.active), a node held while its multiplier keeps it pressed (mu <= 0, the
-// reaction -mu push pushing it out) and released otherwise: s.correction and s.solved_gradient hold
-// P^-1 r and P^-1 g on entry. volume_rate: g . P^-1 r minus each volume's gap to its target. Throws
+// pushes (s.active), a node held unless both its multiplier (mu > 0: a tensile reaction)
+// and its residual let it go: s.correction and s.solved_gradient hold P^-1 r and P^-1 g on
+// entry. volume_rate: g . P^-1 r minus each volume's gap to its target. Throws
 // std::runtime_error when more nodes touch than the column cache holds.
 void constrain_to_contacts(const Model& model, ImplicitSystem& s,
                            std::span<const double> volume_rate);

@@ -106,11 +106,17 @@ void hold_axes(const ImplicitBlocks& blocks, std::vector<BlockEntry>& entries) {
 
 }  // namespace
 
-ImplicitBlocks number_blocks(const Model& model, const std::array<std::vector<int>, 3>& unknown) {
-  const int n = model.node_count();
-  std::vector<int> group(size_t(n), -1), of_group(size_t(model.doubled.rows()), -1);
+std::vector<int> doubled_group_of_node(const Model& model) {
+  std::vector<int> group(size_t(model.node_count()), -1);
   for (int g = 0; g < model.doubled.rows(); ++g)
     for (int i : model.doubled.row(g)) group[size_t(i)] = g;
+  return group;
+}
+
+ImplicitBlocks number_blocks(const Model& model, const std::array<std::vector<int>, 3>& unknown) {
+  const int n = model.node_count();
+  const std::vector<int> group = doubled_group_of_node(model);
+  std::vector<int> of_group(size_t(model.doubled.rows()), -1);
   ImplicitBlocks b;
   b.of_node.assign(size_t(n), -1);
   for (int i = 0; i < n; ++i) {

@@ -24,6 +24,9 @@ struct ImplicitBlocks {
   std::vector<std::array<int, 3>> unknown;
 };
 
+// Per node, its doubled group (Model::doubled's row), -1 for a node in none.
+std::vector<int> doubled_group_of_node(const Model& model);
+
 // unknown: per axis, each node's unknown (ImplicitSystem::unknown).
 ImplicitBlocks number_blocks(const Model& model, const std::array<std::vector<int>, 3>& unknown);
 

@@ -81,9 +81,7 @@ void refuse_unsupported(const Model& model) {
 // holds the group on that axis), -1 on held axes.
 void number_unknowns(const Model& model, ImplicitSystem& s) {
   const int n = model.node_count();
-  std::vector<int> group(size_t(n), -1);
-  for (int g = 0; g < model.doubled.rows(); ++g)
-    for (int i : model.doubled.row(g)) group[size_t(i)] = g;
+  const std::vector<int> group = doubled_group_of_node(model);
   for (int a = 0; a < 3; ++a) {
     std::vector<int>& u = s.unknown[size_t(a)];
     u.assign(size_t(n), -1);
@@ -136,10 +134,7 @@ Eigen::SparseMatrix<double> global_matrix(const Model& model, const std::vector<
 // The factor of one axis's matrix, in a fill-reducing order (approximate minimum degree).
 std::shared_ptr<const ImplicitFactor> factorise(const Eigen::SparseMatrix<double>& P) {
   auto f = std::make_shared<ImplicitFactor>();
-  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> inverse;
-  Eigen::AMDOrdering<int>()(P, inverse);
-  const Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order = inverse.inverse();
-  f->position.assign(order.indices().data(), order.indices().data() + order.size());
+  f->position = minimum_degree_positions(P);
   std::vector<Eigen::Triplet<double>> entries;
   for (int col = 0; col < P.outerSize(); ++col)
     for (Eigen::SparseMatrix<double>::InnerIterator it(P, col); it; ++it) {
