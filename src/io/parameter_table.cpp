@@ -239,10 +239,10 @@ std::vector<Parameter> simulation_parameters() {
        .doc = "Time integration scheme. `verlet` and `newton-cotes` are explicit (dt below the "
               "stability limit); `implicit` is backward Euler solved by local/global iterations "
               "(rotations fitted per node, then one prefactorised sparse solve), stable at any "
-              "dt, for elastic shape-memory objects with gravity, forces, pressures, fixed and "
-              "prescribed nodes, stitches, doubled nodes and volume constraints (see "
-              "docs/implicit.md). Static mode relaxes with Verlet pseudo-dynamics whatever "
-              "this says.",
+              "dt, for elastic shape-memory, active and rigid objects with gravity, forces, "
+              "pressures, fixed and prescribed nodes, springs, stitches, doubled nodes, volume "
+              "constraints and frictionless obstacles (see docs/implicit.md). Static mode "
+              "relaxes with Verlet pseudo-dynamics unless `solver: implicit`.",
        .lands = lands(&SimulationSpec::integrator)},
       {.section = "simulation",
        .name = "implicit_iterations",

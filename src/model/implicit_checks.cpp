@@ -1,4 +1,4 @@
-// What `integrator: implicit` cannot take yet (rigid and active objects, finite elements,
+// What `integrator: implicit` cannot take yet (finite elements,
 // obstacles with friction, contact pairs, needles), found in the scene before compiling: one
 // diagnostic each, at the field.
 #include <fmt/format.h>
@@ -24,7 +24,8 @@ std::string implicit_static_at(const SimulationSpec& s) {
 }
 
 constexpr const char* kTakes =
-    "it takes elastic shape-memory objects with gravity, 'force' loads, pressures, 'fixed', "
+    "it takes elastic shape-memory, active and rigid objects with gravity, 'force' loads, "
+    "pressures, 'fixed', "
     "'displacement' and 'spring' constraints, stitches, doubled nodes, volume constraints and "
     "frictionless obstacles; use 'integrator: verlet'";
 
@@ -44,13 +45,7 @@ void check_implicit_scene(const Scene& scene, std::vector<Diagnostic>& problems)
   if (statics ? s.solver != StaticSolver::implicit : s.integrator != Integrator::implicit) return;
   const std::string at = statics ? implicit_static_at(s) : implicit_at(s);
   for (const ObjectSpec& o : scene.objects) {
-    if (o.type != ObjectType::elastic)
-      problems.push_back(
-          {o.loc,
-           fmt::format("object '{}' has 'type: {}', not supported by 'integrator: "
-                       "implicit'{}: {}",
-                       o.name, o.type == ObjectType::rigid ? "rigid" : "active", at, kTakes)});
-    else if (o.material.model == ElasticModel::fem)
+    if (o.type != ObjectType::rigid && o.material.model == ElasticModel::fem)
       problems.push_back({o.material.loc,
                           fmt::format("object '{}' has 'model: fem', not supported by 'integrator: "
                                       "implicit'{}: {}",

@@ -5,6 +5,7 @@
 // during a run. A copy starts without a factor and makes its own on its first step.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <array>
@@ -36,6 +37,15 @@ struct ImplicitSystem {
   std::shared_ptr<const BlockFactor> coupled;
   std::vector<std::array<int, 3>> block_unknown;
   std::vector<int> block_of_node;  // -1: every axis held
+  // Per rigid body, its unknowns on each axis (free bodies; -1 for driven ones): the motion of
+  // its centre and its turn (a rotation vector in the world frame), after the nodes'; and its
+  // state at the step's start.
+  struct Body {
+    std::array<int, 3> move{-1, -1, -1}, turn{-1, -1, -1};
+    Eigen::Vector3d center, momentum, angular_momentum;
+    Eigen::Quaterniond orientation;
+  };
+  std::vector<Body> body;
   // Per axis, unknowns long: the residual and the correction.
   std::array<Eigen::VectorXd, 3> residual, correction;
   // The solves' right-hand sides, row by row in the factor's order (solver/implicit_step.cpp).

@@ -1,6 +1,7 @@
 #include "solver/implicit_matrix.hpp"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <utility>
 
 #include "model/neighbourhood.hpp"
@@ -75,18 +76,30 @@ Jacobian pull_derivative(const ShapeMemory& m, int k, std::span<const Vec3> rest
   return j;
 }
 
-// Adds K J^T J: the pairs of blocks at or below the diagonal.
-void add_memory_node(const Jacobian& j, double stiffness, const ImplicitBlocks& blocks,
-                     std::vector<BlockEntry>& out) {
-  for (const auto& [p, jp] : j) {
-    const int bp = blocks.of_node[size_t(p)];
-    if (bp < 0) continue;
-    for (const auto& [q, jq] : j) {
-      const int bq = blocks.of_node[size_t(q)];
-      if (bq < 0 || bp < bq) continue;
-      out.push_back({bp, bq, stiffness * jp.transpose() * jq});
+// J over the blocks: a node's own block, or a free rigid body's two (d/d move = J,
+// d/d turn = -J [a]x); nodes held on every axis drop out.
+Jacobian over_blocks(const Model& model, const ImplicitBlocks& blocks, const Jacobian& j) {
+  Jacobian out;
+  for (const auto& [node, jn] : j) {
+    if (const int b = blocks.of_node[size_t(node)]; b >= 0) {
+      out.emplace_back(b, jn);
+      continue;
     }
+    const int body = model.rigid_body_of.empty() ? -1 : model.rigid_body_of[size_t(node)];
+    if (body < 0 || blocks.of_body[size_t(body)][0] < 0) continue;
+    out.emplace_back(blocks.of_body[size_t(body)][0], jn);
+    out.emplace_back(blocks.of_body[size_t(body)][1], Block3(jn * blocks.arm[size_t(node)]));
   }
+  return out;
+}
+
+// Adds K J^T J: the pairs of blocks at or below the diagonal.
+void add_memory_node(const Model& model, const Jacobian& j, double stiffness,
+                     const ImplicitBlocks& blocks, std::vector<BlockEntry>& out) {
+  const Jacobian by_block = over_blocks(model, blocks, j);
+  for (const auto& [bp, jp] : by_block)
+    for (const auto& [bq, jq] : by_block)
+      if (bp >= bq) out.push_back({bp, bq, stiffness * jp.transpose() * jq});
 }
 
 // The held axes' rows and columns zero, their diagonal one: decoupled unknowns that stay 0.
@@ -113,7 +126,8 @@ std::vector<int> doubled_group_of_node(const Model& model) {
   return group;
 }
 
-ImplicitBlocks number_blocks(const Model& model, const std::array<std::vector<int>, 3>& unknown) {
+ImplicitBlocks number_blocks(const Model& model, const std::array<std::vector<int>, 3>& unknown,
+                             const std::vector<ImplicitSystem::Body>& body) {
   const int n = model.node_count();
   const std::vector<int> group = doubled_group_of_node(model);
   std::vector<int> of_group(size_t(model.doubled.rows()), -1);
@@ -131,20 +145,63 @@ ImplicitBlocks number_blocks(const Model& model, const std::array<std::vector<in
     if (g >= 0) of_group[size_t(g)] = b.of_node[size_t(i)];
     b.unknown.push_back(u);
   }
+  for (const ImplicitSystem::Body& r : body) {
+    if (r.move[0] < 0) {
+      b.of_body.push_back({-1, -1});
+      continue;
+    }
+    b.of_body.push_back({int(b.unknown.size()), int(b.unknown.size()) + 1});
+    b.unknown.push_back(r.move);
+    b.unknown.push_back(r.turn);
+  }
+  b.arm.assign(size_t(n), Block3::Zero());
+  for (const RigidBody& r : model.rigid_bodies)
+    for (size_t k = 0; k < r.nodes.size(); ++k)
+      b.arm[size_t(r.nodes[k])] =
+          -r.rest_orientation.toRotationMatrix() * cross_matrix(r.offset[k]);
   return b;
+}
+
+std::vector<FibreSegment> fibre_segments(const Model& model) {
+  std::vector<FibreSegment> segments;
+  for (const FibreBundle& fibres : model.fibres)
+    for (int p = 0; p < fibres.polylines.rows(); ++p) {
+      const auto line = fibres.polylines.row(p);
+      for (size_t k = 0; k + 1 < line.size(); ++k) {
+        const int i = line[k], j = line[k + 1];
+        const Vec3 d = model.rest_position[size_t(j)] - model.rest_position[size_t(i)];
+        if (d.norm() > 0.0)
+          segments.push_back({{i, j}, d.normalized(), fibres.stiffness, fibres.max_contraction});
+      }
+    }
+  return segments;
+}
+
+Block3 fibre_stiffness(const FibreSegment& f) {
+  const Block3 along = f.direction * f.direction.transpose();
+  return 0.5 * f.stiffness * (along + f.max_contraction * (Block3::Identity() - along));
 }
 
 std::vector<std::pair<int, int>> coupled_pattern(const Model& model, const ImplicitBlocks& blocks) {
   std::vector<std::pair<int, int>> pairs;
-  std::vector<int> read;
+  auto couple = [&](const Jacobian& j) {
+    const Jacobian by_block = over_blocks(model, blocks, j);
+    for (const auto& [p, jp] : by_block)
+      for (const auto& [q, jq] : by_block)
+        if (p > q) pairs.emplace_back(p, q);
+  };
+  Jacobian read;
   for (const ShapeMemory& m : model.shape_memory)
     for (int k = 0; k < int(m.nodes.size()); ++k) {
-      read.assign(1, blocks.of_node[size_t(m.nodes[size_t(k)])]);
-      for (int j : m.neighbours.row(k)) read.push_back(blocks.of_node[size_t(j)]);
-      for (int p : read)
-        for (int q : read)
-          if (q >= 0 && p > q) pairs.emplace_back(p, q);
+      read.assign(1, {m.nodes[size_t(k)], Block3::Identity()});
+      for (int j : m.neighbours.row(k)) read.emplace_back(j, Block3::Identity());
+      couple(read);
     }
+  for (const FibreSegment& f : fibre_segments(model))
+    couple({{f.nodes[0], Block3::Identity()}, {f.nodes[1], Block3::Identity()}});
+  for (int b = 0; b < int(blocks.of_body.size()); ++b)
+    if (blocks.of_body[size_t(b)][0] >= 0)
+      pairs.emplace_back(blocks.of_body[size_t(b)][1], blocks.of_body[size_t(b)][0]);
   return pairs;
 }
 
@@ -154,14 +211,27 @@ std::vector<BlockEntry> coupled_matrix(const Model& model, const ImplicitBlocks&
   for (int i = 0; i < model.node_count(); ++i)
     if (const int b = blocks.of_node[size_t(i)]; b >= 0)
       entries.push_back({b, b, model.inertia[size_t(i)] * per_mass * Block3::Identity()});
+  for (int b = 0; b < int(blocks.of_body.size()); ++b) {
+    const auto [move, turn] = blocks.of_body[size_t(b)];
+    if (move < 0) continue;
+    const RigidBody& r = model.rigid_bodies[size_t(b)];
+    entries.push_back({move, move, r.mass * per_mass * Block3::Identity()});
+    entries.push_back({turn, turn, per_mass * Block3(r.inertia.asDiagonal())});
+  }
   for (const ShapeMemory& m : model.shape_memory)
     for (int k = 0; k < int(m.nodes.size()); ++k)
-      add_memory_node(pull_derivative(m, k, model.rest_position), m.stiffness, blocks, entries);
-  // A spring support is linear: its stiffness is exact on the diagonal.
+      add_memory_node(model, pull_derivative(m, k, model.rest_position), m.stiffness, blocks,
+                      entries);
+  // A spring support is linear: its stiffness is exact.
   for (const SpringSupport& springs : model.springs)
     for (int i : springs.nodes)
-      if (const int b = blocks.of_node[size_t(i)]; b >= 0)
-        entries.push_back({b, b, springs.stiffness * Block3::Identity()});
+      add_memory_node(model, {{i, Block3::Identity()}}, springs.stiffness, blocks, entries);
+  for (const FibreSegment& f : fibre_segments(model)) {
+    const Block3 k = fibre_stiffness(f);  // k = J^T J for J = k^(1/2): one block a node
+    const Eigen::LLT<Block3> root(k);
+    add_memory_node(model, {{f.nodes[0], root.matrixU()}, {f.nodes[1], -Block3(root.matrixU())}},
+                    1.0, blocks, entries);
+  }
   hold_axes(blocks, entries);
   return entries;
 }

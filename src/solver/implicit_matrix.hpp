@@ -13,27 +13,55 @@
 #include <vector>
 
 #include "model/block_cholesky.hpp"
+#include "model/implicit_system.hpp"
 #include "phymul/model.hpp"
 
 namespace phymul {
 
 // The blocks of the unknowns: per node its block (-1: every axis held), per block each
 // axis's unknown (-1: held there, the block's identity row).
+// A free rigid body has two blocks, after the nodes': its centre's motion and its turn.
 struct ImplicitBlocks {
   std::vector<int> of_node;
   std::vector<std::array<int, 3>> unknown;
+  std::vector<std::array<int, 2>> of_body;  // per rigid body: move and turn blocks (-1: driven)
+  // Per node of a free body: d(x_node)/d(turn) at rest, -R0 [o]x (o: the node's offset in the
+  // body's principal frame, R0 that frame's rest orientation; the turn in the body's frame).
+  std::vector<Block3> arm;
 };
+
+// An active fibre's segment: its nodes, its unit direction at rest, its stiffness (N/m) and
+// its bundle's largest contraction.
+struct FibreSegment {
+  std::array<int, 2> nodes;
+  Vec3 direction;
+  double stiffness = 0.0, max_contraction = 0.0;
+};
+
+std::vector<FibreSegment> fibre_segments(const Model& model);
+
+// The segment's stiffness in P: half a taut one's (k along it; across it the tension's T / l,
+// k c at rest length and full activation). A tension-only segment is slack or taut, and the
+// midpoint lets the iterations contract in either state, where a taut one's would stall on
+// slack fibres and none would overshoot on taut ones.
+Block3 fibre_stiffness(const FibreSegment& f);
 
 // Per node, its doubled group (Model::doubled's row), -1 for a node in none.
 std::vector<int> doubled_group_of_node(const Model& model);
 
-// unknown: per axis, each node's unknown (ImplicitSystem::unknown).
-ImplicitBlocks number_blocks(const Model& model, const std::array<std::vector<int>, 3>& unknown);
+// unknown: per axis, each node's unknown (ImplicitSystem::unknown); body: the rigid bodies'
+// (ImplicitSystem::body).
+ImplicitBlocks number_blocks(const Model& model, const std::array<std::vector<int>, 3>& unknown,
+                             const std::vector<ImplicitSystem::Body>& body);
 
 // The pairs of blocks P couples (each memory node's, every pair of the nodes it reads).
 std::vector<std::pair<int, int>> coupled_pattern(const Model& model, const ImplicitBlocks& blocks);
 
-// P's lower blocks for step h, held axes' rows and columns the identity's.
+// P's lower blocks for step h, held axes' rows and columns the identity's. A free rigid body's
+// node moves by dx = move + R (turn x o) (turn a rotation vector in the body's principal
+// frame, o the node's offset there, R taken at rest): its terms reach the body's blocks
+// through that map, and the body's mass and principal inertia are theirs. In the body's frame
+// the inertia's block is exact at any orientation.
 std::vector<BlockEntry> coupled_matrix(const Model& model, const ImplicitBlocks& blocks, double h);
 
 }  // namespace phymul

@@ -28,6 +28,7 @@
 #include "solver/implicit_contacts.hpp"
 #include "solver/implicit_matrix.hpp"
 #include "solver/implicit_solve.hpp"
+#include "solver/rigid.hpp"
 
 namespace phymul {
 namespace {
@@ -63,10 +64,13 @@ bool with_friction(const Model& model) {
                      [](const RigidObstacle& o) { return o.friction > 0.0; });
 }
 
+bool has_free_body(const Model& model) {
+  return std::any_of(model.rigid_bodies.begin(), model.rigid_bodies.end(),
+                     [](const RigidBody& r) { return !r.driven; });
+}
+
 void refuse_unsupported(const Model& model) {
-  const char* what = !model.rigid_bodies.empty()    ? "rigid bodies"
-                     : !model.fibres.empty()        ? "active fibres"
-                     : !model.explicit_fem.empty()  ? "explicit finite elements"
+  const char* what = !model.explicit_fem.empty()    ? "explicit finite elements"
                      : with_friction(model)         ? "obstacles with friction"
                      : !model.contact_pairs.empty() ? "contact pairs"
                      : model.volumes.size() > size_t(kMaxVolumes)
@@ -82,6 +86,7 @@ void refuse_unsupported(const Model& model) {
 void number_unknowns(const Model& model, ImplicitSystem& s) {
   const int n = model.node_count();
   const std::vector<int> group = doubled_group_of_node(model);
+  s.body.assign(model.rigid_bodies.size(), {});
   for (int a = 0; a < 3; ++a) {
     std::vector<int>& u = s.unknown[size_t(a)];
     u.assign(size_t(n), -1);
@@ -97,6 +102,9 @@ void number_unknowns(const Model& model, ImplicitSystem& s) {
         u[size_t(i)] = count++;
       }
     }
+    for (size_t b = 0; b < s.body.size(); ++b)
+      if (!model.rigid_bodies[b].driven)
+        s.body[b].move[size_t(a)] = count++, s.body[b].turn[size_t(a)] = count++;
     s.unknowns[size_t(a)] = count;
   }
 }
@@ -104,7 +112,7 @@ void number_unknowns(const Model& model, ImplicitSystem& s) {
 // P = M (1/h^2 + c/h) + sum K A_k^T A_k (+ the springs' k) over one axis's unknowns (lower triangle
 // and diagonal are what the factor reads; both halves are given to the ordering).
 Eigen::SparseMatrix<double> global_matrix(const Model& model, const std::vector<int>& u, int count,
-                                          double h) {
+                                          int axis, double h) {
   std::vector<Eigen::Triplet<double>> entries;
   const double per_mass = 1.0 / (h * h) + model.damping / h;
   for (int i = 0; i < model.node_count(); ++i)
@@ -126,6 +134,14 @@ Eigen::SparseMatrix<double> global_matrix(const Model& model, const std::vector<
   for (const SpringSupport& springs : model.springs)
     for (int i : springs.nodes)
       if (u[size_t(i)] >= 0) entries.emplace_back(u[size_t(i)], u[size_t(i)], springs.stiffness);
+  // The fibre segments' stiffness (fibre_stiffness), this axis's share.
+  for (const FibreSegment& f : fibre_segments(model)) {
+    const int p = u[size_t(f.nodes[0])], q = u[size_t(f.nodes[1])];
+    const double k = fibre_stiffness(f)(axis, axis);
+    if (p >= 0) entries.emplace_back(p, p, k);
+    if (q >= 0) entries.emplace_back(q, q, k);
+    if (p >= 0 && q >= 0) entries.emplace_back(p, q, -k), entries.emplace_back(q, p, -k);
+  }
   Eigen::SparseMatrix<double> P(count, count);
   P.setFromTriplets(entries.begin(), entries.end());
   return P;
@@ -152,7 +168,7 @@ std::shared_ptr<const ImplicitFactor> factorise(const Eigen::SparseMatrix<double
 // The three axes' coupled factor (solver/implicit_matrix.hpp) when L holds at most
 // kMostCoupledBlocks blocks; false (nothing set) otherwise.
 bool factorise_coupled(const Model& model, ImplicitSystem& s, double h) {
-  const ImplicitBlocks blocks = number_blocks(model, s.unknown);
+  const ImplicitBlocks blocks = number_blocks(model, s.unknown, s.body);
   const int count = int(blocks.unknown.size());
   BlockFactor f = analyse_blocks(count, coupled_pattern(model, blocks), kMostCoupledBlocks);
   if (f.row.size() > kMostCoupledBlocks) return false;
@@ -163,15 +179,16 @@ bool factorise_coupled(const Model& model, ImplicitSystem& s, double h) {
   return true;
 }
 
-// One factor per axis of P with L = sum K A_k^T A_k; axes whose unknowns coincide share it.
+// One factor per axis of P with L = sum K A_k^T A_k; axes whose unknowns coincide share it
+// (unless fibres, whose stiffness depends on their direction, make the axes' matrices differ).
 void factorise_axes(const Model& model, ImplicitSystem& s, double h) {
   for (int a = 0; a < 3; ++a) {
     s.factor[size_t(a)] = nullptr;
-    for (int b = 0; b < a && !s.factor[size_t(a)]; ++b)
+    for (int b = 0; b < a && !s.factor[size_t(a)] && model.fibres.empty(); ++b)
       if (s.unknown[size_t(b)] == s.unknown[size_t(a)]) s.factor[size_t(a)] = s.factor[size_t(b)];
     if (!s.factor[size_t(a)])
       s.factor[size_t(a)] =
-          factorise(global_matrix(model, s.unknown[size_t(a)], s.unknowns[size_t(a)], h));
+          factorise(global_matrix(model, s.unknown[size_t(a)], s.unknowns[size_t(a)], a, h));
   }
 }
 
@@ -218,7 +235,13 @@ void prepare(const Model& model, ImplicitSystem& s, double h) {
   s.coupled = nullptr;
   s.block_of_node.clear();
   for (auto& f : s.factor) f = nullptr;
-  if (!factorise_coupled(model, s, h)) factorise_axes(model, s, h);
+  if (!factorise_coupled(model, s, h)) {
+    if (has_free_body(model))
+      throw std::invalid_argument(
+          "the implicit integrator takes free rigid bodies only where the three axes' factor "
+          "fits (at most 2^18 blocks): drive the bodies ('motion') or use the verlet integrator");
+    factorise_axes(model, s, h);
+  }
   size_t most = 0;
   for (int a = 0; a < 3; ++a) {
     const int m = s.unknowns[size_t(a)];
@@ -299,26 +322,43 @@ void solve_fields(ImplicitSystem& s, const Fields& io) {
   }
 }
 
-// Sums a node field's free axes into the unknowns (a doubled group's members add up).
-void gather(const ImplicitSystem& s, std::span<const Vec3> field,
+// Node i's value of a field into its free axes' unknowns.
+void gather_node(const ImplicitSystem& s, int i, const Vec3& value,
+                 std::array<Eigen::VectorXd, 3>& out) {
+  for (int a = 0; a < 3; ++a)
+    if (const int u = s.unknown[size_t(a)][size_t(i)]; u >= 0) out[size_t(a)][u] += value[a];
+}
+
+// Sums a node field into the unknowns (a doubled group's members add up); a free rigid body's
+// nodes into the body's (the force on the centre's motion, its moment, in the body's frame, on
+// the turn).
+void gather(const Model& model, const Data& d, const ImplicitSystem& s, std::span<const Vec3> field,
             std::array<Eigen::VectorXd, 3>& out) {
-  for (int a = 0; a < 3; ++a) {
-    out[size_t(a)].setZero();
-    const std::vector<int>& u = s.unknown[size_t(a)];
-    for (size_t i = 0; i < u.size(); ++i)
-      if (u[i] >= 0) out[size_t(a)][u[i]] += field[i][a];
+  for (int a = 0; a < 3; ++a) out[size_t(a)].setZero();
+  for (int i = 0; i < model.node_count(); ++i) gather_node(s, i, field[size_t(i)], out);
+  for (size_t k = 0; k < s.body.size(); ++k) {
+    const ImplicitSystem::Body& b = s.body[k];
+    if (b.move[0] < 0) continue;
+    Vec3 force = Vec3::Zero(), moment = Vec3::Zero();
+    for (int i : model.rigid_bodies[k].nodes) {
+      force += field[size_t(i)];
+      moment += (d.x[size_t(i)] - d.bodies[k].center).cross(field[size_t(i)]);
+    }
+    moment = d.bodies[k].orientation.conjugate() * moment;  // in the body's frame
+    for (int a = 0; a < 3; ++a) {
+      out[size_t(a)][b.move[size_t(a)]] += force[a];
+      out[size_t(a)][b.turn[size_t(a)]] += moment[a];
+    }
   }
 }
 
-// The same over some nodes only (the rest of `field` is not read).
+// A volume's gradient over some nodes' free axes only (the rest of `field` is not read): as
+// in the explicit projection, which moves nodes by their inverse masses, a volume's pressure
+// moves its free nodes and not the rigid bodies its surface is doubled with.
 void gather(const ImplicitSystem& s, std::span<const Vec3> field, std::span<const int> nodes,
             std::array<Eigen::VectorXd, 3>& out) {
-  for (int a = 0; a < 3; ++a) {
-    out[size_t(a)].setZero();
-    const std::vector<int>& u = s.unknown[size_t(a)];
-    for (int i : nodes)
-      if (u[size_t(i)] >= 0) out[size_t(a)][u[size_t(i)]] += field[size_t(i)][a];
-  }
+  for (int a = 0; a < 3; ++a) out[size_t(a)].setZero();
+  for (int i : nodes) gather_node(s, i, field[size_t(i)], out);
 }
 
 double dot(const std::array<Eigen::VectorXd, 3>& p, const std::array<Eigen::VectorXd, 3>& q) {
@@ -334,6 +374,39 @@ void backward_euler_residual(const Model& model, const Data& d, double h, std::s
     r[size_t(i)] = d.f[size_t(i)] + model.inertia[size_t(i)] / (h * h) *
                                         (h * w.v_start[size_t(i)] - (1.0 + c * h) * moved);
   }
+  // A rigid node's inertia is its body's (add_body_inertia).
+  for (const RigidBody& body : model.rigid_bodies)
+    for (int i : body.nodes) r[size_t(i)] = d.f[size_t(i)];
+}
+
+// The rotation vector (rad, world frame) that turns `from` into `to`.
+Vec3 turn_between(const Eigen::Quaterniond& from, const Eigen::Quaterniond& to) {
+  const Eigen::AngleAxisd turn(to * from.conjugate());
+  return turn.angle() * turn.axis();
+}
+
+// The free bodies' backward-Euler inertia in the residual: p0 / h - (1/h + c) M dx / h on the
+// centre, L0 / h - (1/h + c) I(q) theta / h on the turn, theta the rotation vector from the
+// step's start (the step's end angular momentum is I(q) theta / h, as end_bodies sets it),
+// both turn terms in the body's frame, where I(q) is the principal inertia.
+void add_body_inertia(const Model& model, const Data& d, ImplicitSystem& s, double h) {
+  const double c = model.damping;
+  for (size_t k = 0; k < s.body.size(); ++k) {
+    const ImplicitSystem::Body& b = s.body[k];
+    if (b.move[0] < 0) continue;
+    const RigidBody& r = model.rigid_bodies[k];
+    const RigidBodyState& now = d.bodies[k];
+    const Vec3 move = b.momentum / h - (1.0 / h + c) * r.mass * (now.center - b.center) / h;
+    const Eigen::Quaterniond to_body = now.orientation.conjugate();
+    const Vec3 turn =
+        to_body * b.angular_momentum / h -
+        (1.0 / h + c) *
+            r.inertia.cwiseProduct(to_body * turn_between(b.orientation, now.orientation)) / h;
+    for (int a = 0; a < 3; ++a) {
+      s.residual[size_t(a)][b.move[size_t(a)]] += move[a];
+      s.residual[size_t(a)][b.turn[size_t(a)]] += turn[a];
+    }
+  }
 }
 
 // The nodes touching an obstacle at load_time, into work.contacts (push: the way the shape
@@ -347,6 +420,9 @@ void find_contacts(const Model& model, Data& d, double load_time) {
   for (int k = 0; k < int(model.obstacles.size()); ++k) {
     const RigidObstacle& o = model.obstacles[size_t(k)];
     auto add = [&](int i) {
+      const std::array<std::vector<int>, 3>& u = w.implicit.unknown;
+      if (u[0][size_t(i)] < 0 && u[1][size_t(i)] < 0 && u[2][size_t(i)] < 0)
+        return;  // held, or moved by a rigid body: the obstacle does not move it
       const SurfaceDistance sd =
           obstacle_distance(o, d.controls.obstacle_motion[size_t(k)], d.x[size_t(i)], load_time);
       const double gap = o.keep_inside ? -sd.distance : sd.distance;
@@ -426,6 +502,16 @@ double largest_residual(const Model& model, Data& d, ImplicitSystem& s) {
         r2 += s.residual[size_t(a)][u] * s.residual[size_t(a)][u];
     largest2 = std::max(largest2, r2);
   }
+  for (size_t k = 0; k < s.body.size(); ++k) {  // the force, and the moment over the body's size
+    const ImplicitSystem::Body& b = s.body[k];
+    if (b.move[0] < 0) continue;
+    Vec3 force, moment;
+    for (int a = 0; a < 3; ++a)
+      force[a] = s.residual[size_t(a)][b.move[size_t(a)]],
+      moment[a] = s.residual[size_t(a)][b.turn[size_t(a)]];
+    largest2 = std::max({largest2, force.squaredNorm(),
+                         moment.squaredNorm() / std::pow(model.rigid_bodies[k].size, 2)});
+  }
   return std::sqrt(largest2);
 }
 
@@ -490,12 +576,64 @@ double residual_at(const Model& model, Data& d, ImplicitSystem& s, double h, dou
   Workspace& w = *d.work;
   if (!model.obstacles.empty()) find_contacts(model, d, load_time);
   backward_euler_residual(model, d, h, w.f_start);
-  gather(s, w.f_start, s.residual);
+  gather(model, d, s, w.f_start, s.residual);
+  add_body_inertia(model, d, s, h);
   for (size_t l = 0; l < model.volumes.size(); ++l) {
     volume_gradient(model.volumes[l], d.x, w.f_start);
     gather(s, w.f_start, model.volumes[l].nodes, s.gradient[l]);
   }
   return largest_residual(model, d, s);
+}
+
+// Keeps each body's state at the step's start, then its first guess: the free bodies drift
+// with their momenta, the driven ones take their pose at load_time.
+void start_bodies(const Model& model, Data& d, ImplicitSystem& s, double h, double load_time) {
+  if (model.rigid_bodies.empty()) return;
+  for (size_t k = 0; k < s.body.size(); ++k) {
+    const RigidBodyState& now = d.bodies[k];
+    ImplicitSystem::Body& b = s.body[k];
+    b.center = now.center, b.orientation = now.orientation;
+    b.momentum = now.momentum, b.angular_momentum = now.angular_momentum;
+  }
+  drift_rigid_bodies(model, d, h, load_time);
+}
+
+// The free bodies moved by alpha times their correction, their nodes with them.
+void move_bodies(const Model& model, Data& d, const ImplicitSystem& s, double alpha) {
+  if (model.rigid_bodies.empty()) return;
+  for (size_t k = 0; k < s.body.size(); ++k) {
+    const ImplicitSystem::Body& b = s.body[k];
+    if (b.move[0] < 0) continue;
+    Vec3 move, turn;
+    for (int a = 0; a < 3; ++a)
+      move[a] = s.correction[size_t(a)][b.move[size_t(a)]],
+      turn[a] = s.correction[size_t(a)][b.turn[size_t(a)]];
+    RigidBodyState& now = d.bodies[k];
+    now.center += alpha * move;
+    const double angle = alpha * turn.norm();
+    if (angle > 0.0)  // the turn is in the body's frame
+      now.orientation =
+          (now.orientation * Eigen::Quaterniond(Eigen::AngleAxisd(angle, turn.normalized())))
+              .normalized();
+  }
+  place_rigid_nodes(model, d);
+}
+
+// The free bodies' momenta at the step's end (backward Euler: the mean velocities over the
+// step), their nodes' velocities with them.
+void end_bodies(const Model& model, Data& d, const ImplicitSystem& s, double h) {
+  if (model.rigid_bodies.empty()) return;
+  for (size_t k = 0; k < s.body.size(); ++k) {
+    const ImplicitSystem::Body& b = s.body[k];
+    if (b.move[0] < 0) continue;
+    const RigidBody& r = model.rigid_bodies[k];
+    RigidBodyState& now = d.bodies[k];
+    now.momentum = r.mass * (now.center - b.center) / h;
+    const Eigen::Quaterniond& q = now.orientation;
+    now.angular_momentum =
+        q * Vec3(r.inertia.cwiseProduct(q.conjugate() * turn_between(b.orientation, q))) / h;
+  }
+  place_rigid_nodes(model, d);
 }
 
 }  // namespace
@@ -516,6 +654,7 @@ void step_implicit(const Model& model, Data& d, double h, double load_time, int 
     w.v_start[size_t(i)] = d.v[size_t(i)];
     d.x[size_t(i)] += h * d.v[size_t(i)];  // the first guess: the inertial position
   }
+  start_bodies(model, d, s, h, load_time);
   apply_position_constraints(model, d.controls, w, d.x, load_time, w.f_start);
   s.iterations = 0;
   std::fill(s.held_by.begin(), s.held_by.end(), -1);  // each step decides afresh
@@ -532,12 +671,14 @@ void step_implicit(const Model& model, Data& d, double h, double load_time, int 
       for (int i = 0; i < n; ++i)
         if (u[size_t(i)] >= 0) d.x[size_t(i)][a] += alpha * s.correction[size_t(a)][u[size_t(i)]];
     }
+    move_bodies(model, d, s, alpha);
     // Exactly on the volumes (the linearised solve left them off by second-order terms).
     apply_position_constraints(model, d.controls, w, d.x, load_time, w.f_start);
     ++s.iterations;
   }
   d.load_time = load_time;
   for (int i = 0; i < n; ++i) d.v[size_t(i)] = (d.x[size_t(i)] - w.x_start[size_t(i)]) / h;
+  end_bodies(model, d, s, h);
 }
 
 double implicit_residual_force(const Data& d) { return d.work->implicit.residual_force; }

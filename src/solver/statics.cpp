@@ -144,8 +144,10 @@ void fire_update(const Model& model, Data& d, StaticProgress& fire) {
 // point, a step that does not move, is the equilibrium f = 0.
 void implicit_static_step(const Model& model, Data& d, double load_time, double tolerance) {
   for (Vec3& v : d.v) v.setZero();
+  stop_rigid_bodies(d);
   step_implicit(model, d, 1000.0 * d.dt, load_time, model.settings.implicit_iterations, tolerance);
   for (Vec3& v : d.v) v.setZero();
+  stop_rigid_bodies(d);
 }
 
 StaticResult continue_relax(const Model& model, Data& d, double load_time, long max_iterations,

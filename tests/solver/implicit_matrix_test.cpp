@@ -75,7 +75,7 @@ double largest_mismatch(const Model& model, double& largest) {
   for (int a = 0; a < 3; ++a)
     for (int i = 0; i < model.node_count(); ++i)
       unknown[size_t(a)].push_back(model.inverse_mass[size_t(i)][a] > 0.0 ? i : -1);
-  const ImplicitBlocks blocks = number_blocks(model, unknown);
+  const ImplicitBlocks blocks = number_blocks(model, unknown, {});
   const int n = int(blocks.unknown.size());
   const double h = 1.0;
   Eigen::MatrixXd assembled = Eigen::MatrixXd::Zero(3 * n, 3 * n);
