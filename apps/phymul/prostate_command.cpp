@@ -24,7 +24,8 @@ namespace {
 struct Settings {
   prostate::Options study;
   std::vector<double> fillings_ml{50, 100, 200, 300, 400};
-  std::string probe = "both", model = "lsm", neck, dt_estimate, support = "lateral";
+  std::string probe = "both", model = "lsm", neck, dt_estimate, support = "lateral",
+              static_solver = "relaxation";
   double force = 0, lift_mm = 0, young_kpa = 0, mass_scaling_us = -1, stitch_radius_mm = 0;
   int bladder_subdivisions = 0;
   std::string output = "results/prostate", json_file, scenes;
@@ -88,6 +89,7 @@ int run(Settings& s) {
   if (s.young_kpa > 0) o.prostate_young = s.young_kpa * 1e3;
   if (s.mass_scaling_us >= 0) o.mass_scaling_dt = s.mass_scaling_us * 1e-6;
   if (const auto estimate = scene_value<DtEstimate>(s.dt_estimate)) o.dt_estimate = *estimate;
+  o.static_solver = *scene_value<StaticSolver>(s.static_solver);
   try {
     if (!s.scenes.empty()) {  // the study's scenes, in dynamics, for `phymul run`
       std::filesystem::create_directories(s.scenes);
@@ -216,6 +218,11 @@ Command add_prostate_command(CLI::App& parent) {
       ->check(CLI::Range(0.0, 1e6));
   app->add_option("--hexahedra", o.prostate_hexahedra, "prostate hexahedra per axis (even)")
       ->check(CLI::Range(2, 40))
+      ->capture_default_str();
+  app->add_option("--static-solver", s.static_solver,
+                  "equilibria by kinetic relaxation or by the implicit static solver "
+                  "(simulation.solver)")
+      ->check(CLI::IsMember({"relaxation", "implicit"}))
       ->capture_default_str();
   app->add_option("--tolerance", o.tolerance, "equilibrium: largest residual nodal force (N)")
       ->check(CLI::Range(1e-12, 1e-2))

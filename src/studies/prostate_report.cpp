@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "phymul/scene_words.hpp"
 #include "phymul/studies/prostate.hpp"
 #include "phymul/vtk.hpp"
 
@@ -53,10 +54,11 @@ std::string json(const Study& study) {
         r.hold_force, r.top_node_force, r.stitched.size(), r.iterations);
   }
   j += fmt::format(
-      "\n  ],\n  \"support\": \"{}\",\n  \"prostate_stiffness_n_per_m\": {:.17g},\n"
+      "\n  ],\n  \"support\": \"{}\",\n  \"static_solver\": \"{}\",\n"
+      "  \"prostate_stiffness_n_per_m\": {:.17g},\n"
       "  \"bladder_stiffness_n_per_m\": {:.17g},\n  \"wall_time_s\": {:.6g}",
-      support_name(study.options.support), study.options.prostate_stiffness,
-      study.options.bladder_stiffness, study.wall_time);
+      support_name(study.options.support), scene_word(study.options.static_solver),
+      study.options.prostate_stiffness, study.options.bladder_stiffness, study.wall_time);
   if (!study.real_time.empty()) {
     j += ",\n  \"real_time\": [";
     for (size_t k = 0; k < study.real_time.size(); ++k) {

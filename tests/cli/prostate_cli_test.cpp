@@ -58,6 +58,28 @@ TEST(ProstateCli, RigidRunsWriteTheProbeBesideEachFrame) {
   }
 }
 
+// --static-solver implicit: the same equilibria by the implicit static solver, said in the JSON.
+TEST(ProstateCli, TheImplicitStaticSolverFindsTheSameDeformation) {
+  TempDir dir;
+  auto deformation = [&](const std::string& solver) {
+    const auto json = dir.path() / (solver + ".json");
+    const auto r = run_command(fmt::format(
+        "OMP_NUM_THREADS=1 '{}' prostate --fillings 50 --probe pressure --static-solver {} "
+        "--tolerance 1e-8 --no-pictures --no-real-time -q -o '{}' --json '{}'",
+        cli(), solver, (dir.path() / solver).string(), json.string()));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    const std::string text = read_text(json);
+    EXPECT_NE(text.find(fmt::format("\"static_solver\": \"{}\"", solver)), std::string::npos)
+        << text;
+    const std::string key = "\"prostate_deformation_pct\": ";
+    const size_t at = text.find(key);
+    return at == std::string::npos ? 0.0 : std::stod(text.substr(at + key.size()));
+  };
+  const double relaxed = deformation("relaxation"), implicit = deformation("implicit");
+  EXPECT_GT(relaxed, 1.0);  // per cent
+  EXPECT_NEAR(implicit, relaxed, 1e-5 * relaxed);
+}
+
 TEST(ProstateCli, RefusesAFillingOutOfRange) {
   const auto r = run_command(fmt::format("'{}' prostate --fillings 2000 -q", cli()));
   EXPECT_NE(r.exit_code, 0);
