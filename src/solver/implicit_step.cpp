@@ -25,10 +25,10 @@
 #include "constraints/contact.hpp"
 #include "model/workspace.hpp"
 #include "phymul/forces.hpp"
+#include "solver/implicit_bodies.hpp"
 #include "solver/implicit_contacts.hpp"
 #include "solver/implicit_matrix.hpp"
 #include "solver/implicit_solve.hpp"
-#include "solver/rigid.hpp"
 
 namespace phymul {
 namespace {
@@ -336,20 +336,7 @@ void gather(const Model& model, const Data& d, const ImplicitSystem& s, std::spa
             std::array<Eigen::VectorXd, 3>& out) {
   for (int a = 0; a < 3; ++a) out[size_t(a)].setZero();
   for (int i = 0; i < model.node_count(); ++i) gather_node(s, i, field[size_t(i)], out);
-  for (size_t k = 0; k < s.body.size(); ++k) {
-    const ImplicitSystem::Body& b = s.body[k];
-    if (b.move[0] < 0) continue;
-    Vec3 force = Vec3::Zero(), moment = Vec3::Zero();
-    for (int i : model.rigid_bodies[k].nodes) {
-      force += field[size_t(i)];
-      moment += (d.x[size_t(i)] - d.bodies[k].center).cross(field[size_t(i)]);
-    }
-    moment = d.bodies[k].orientation.conjugate() * moment;  // in the body's frame
-    for (int a = 0; a < 3; ++a) {
-      out[size_t(a)][b.move[size_t(a)]] += force[a];
-      out[size_t(a)][b.turn[size_t(a)]] += moment[a];
-    }
-  }
+  gather_bodies(model, d, s, field, out);
 }
 
 // A volume's gradient over some nodes' free axes only (the rest of `field` is not read): as
@@ -377,36 +364,6 @@ void backward_euler_residual(const Model& model, const Data& d, double h, std::s
   // A rigid node's inertia is its body's (add_body_inertia).
   for (const RigidBody& body : model.rigid_bodies)
     for (int i : body.nodes) r[size_t(i)] = d.f[size_t(i)];
-}
-
-// The rotation vector (rad, world frame) that turns `from` into `to`.
-Vec3 turn_between(const Eigen::Quaterniond& from, const Eigen::Quaterniond& to) {
-  const Eigen::AngleAxisd turn(to * from.conjugate());
-  return turn.angle() * turn.axis();
-}
-
-// The free bodies' backward-Euler inertia in the residual: p0 / h - (1/h + c) M dx / h on the
-// centre, L0 / h - (1/h + c) I(q) theta / h on the turn, theta the rotation vector from the
-// step's start (the step's end angular momentum is I(q) theta / h, as end_bodies sets it),
-// both turn terms in the body's frame, where I(q) is the principal inertia.
-void add_body_inertia(const Model& model, const Data& d, ImplicitSystem& s, double h) {
-  const double c = model.damping;
-  for (size_t k = 0; k < s.body.size(); ++k) {
-    const ImplicitSystem::Body& b = s.body[k];
-    if (b.move[0] < 0) continue;
-    const RigidBody& r = model.rigid_bodies[k];
-    const RigidBodyState& now = d.bodies[k];
-    const Vec3 move = b.momentum / h - (1.0 / h + c) * r.mass * (now.center - b.center) / h;
-    const Eigen::Quaterniond to_body = now.orientation.conjugate();
-    const Vec3 turn =
-        to_body * b.angular_momentum / h -
-        (1.0 / h + c) *
-            r.inertia.cwiseProduct(to_body * turn_between(b.orientation, now.orientation)) / h;
-    for (int a = 0; a < 3; ++a) {
-      s.residual[size_t(a)][b.move[size_t(a)]] += move[a];
-      s.residual[size_t(a)][b.turn[size_t(a)]] += turn[a];
-    }
-  }
 }
 
 // The nodes touching an obstacle at load_time, into work.contacts (push: the way the shape
@@ -502,17 +459,7 @@ double largest_residual(const Model& model, Data& d, ImplicitSystem& s) {
         r2 += s.residual[size_t(a)][u] * s.residual[size_t(a)][u];
     largest2 = std::max(largest2, r2);
   }
-  for (size_t k = 0; k < s.body.size(); ++k) {  // the force, and the moment over the body's size
-    const ImplicitSystem::Body& b = s.body[k];
-    if (b.move[0] < 0) continue;
-    Vec3 force, moment;
-    for (int a = 0; a < 3; ++a)
-      force[a] = s.residual[size_t(a)][b.move[size_t(a)]],
-      moment[a] = s.residual[size_t(a)][b.turn[size_t(a)]];
-    largest2 = std::max({largest2, force.squaredNorm(),
-                         moment.squaredNorm() / std::pow(model.rigid_bodies[k].size, 2)});
-  }
-  return std::sqrt(largest2);
+  return std::sqrt(std::max(largest2, largest_body_residual2(model, s)));
 }
 
 // Whether the rest shape's solve of volume l's gradient stands for its current one: with
@@ -583,57 +530,6 @@ double residual_at(const Model& model, Data& d, ImplicitSystem& s, double h, dou
     gather(s, w.f_start, model.volumes[l].nodes, s.gradient[l]);
   }
   return largest_residual(model, d, s);
-}
-
-// Keeps each body's state at the step's start, then its first guess: the free bodies drift
-// with their momenta, the driven ones take their pose at load_time.
-void start_bodies(const Model& model, Data& d, ImplicitSystem& s, double h, double load_time) {
-  if (model.rigid_bodies.empty()) return;
-  for (size_t k = 0; k < s.body.size(); ++k) {
-    const RigidBodyState& now = d.bodies[k];
-    ImplicitSystem::Body& b = s.body[k];
-    b.center = now.center, b.orientation = now.orientation;
-    b.momentum = now.momentum, b.angular_momentum = now.angular_momentum;
-  }
-  drift_rigid_bodies(model, d, h, load_time);
-}
-
-// The free bodies moved by alpha times their correction, their nodes with them.
-void move_bodies(const Model& model, Data& d, const ImplicitSystem& s, double alpha) {
-  if (model.rigid_bodies.empty()) return;
-  for (size_t k = 0; k < s.body.size(); ++k) {
-    const ImplicitSystem::Body& b = s.body[k];
-    if (b.move[0] < 0) continue;
-    Vec3 move, turn;
-    for (int a = 0; a < 3; ++a)
-      move[a] = s.correction[size_t(a)][b.move[size_t(a)]],
-      turn[a] = s.correction[size_t(a)][b.turn[size_t(a)]];
-    RigidBodyState& now = d.bodies[k];
-    now.center += alpha * move;
-    const double angle = alpha * turn.norm();
-    if (angle > 0.0)  // the turn is in the body's frame
-      now.orientation =
-          (now.orientation * Eigen::Quaterniond(Eigen::AngleAxisd(angle, turn.normalized())))
-              .normalized();
-  }
-  place_rigid_nodes(model, d);
-}
-
-// The free bodies' momenta at the step's end (backward Euler: the mean velocities over the
-// step), their nodes' velocities with them.
-void end_bodies(const Model& model, Data& d, const ImplicitSystem& s, double h) {
-  if (model.rigid_bodies.empty()) return;
-  for (size_t k = 0; k < s.body.size(); ++k) {
-    const ImplicitSystem::Body& b = s.body[k];
-    if (b.move[0] < 0) continue;
-    const RigidBody& r = model.rigid_bodies[k];
-    RigidBodyState& now = d.bodies[k];
-    now.momentum = r.mass * (now.center - b.center) / h;
-    const Eigen::Quaterniond& q = now.orientation;
-    now.angular_momentum =
-        q * Vec3(r.inertia.cwiseProduct(q.conjugate() * turn_between(b.orientation, q))) / h;
-  }
-  place_rigid_nodes(model, d);
 }
 
 }  // namespace
