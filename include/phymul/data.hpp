@@ -127,6 +127,9 @@ struct Data {
   long step = 0;           // steps taken (dynamics) or relaxation iterations (statics)
   std::vector<Vec3> x, v;  // m, m/s, per node
   std::vector<Vec3> f;     // N, every force but damping, at (x, load_time)
+  // m/s^2 per node with the implicit integrator (else empty): the last step's mean acceleration
+  // (v - v at its start) / dt, which the next step's first guess continues.
+  std::vector<Vec3> acceleration;
   std::vector<Eigen::Quaterniond> rotation;  // per shape-memory node: last best-fit rotation
   // J: elastic energy at the last force pass (shape memory and explicit finite elements).
   double shape_memory_energy = 0.0;

@@ -19,7 +19,7 @@ namespace {
 // Integers are 64-bit and doubles their IEEE bits, in this machine's byte order (the mark
 // refuses a file from a machine of the other order).
 constexpr char kMagic[8] = {'P', 'H', 'Y', 'M', 'U', 'L', 'C', 'K'};
-constexpr std::uint64_t kVersion = 4;
+constexpr std::uint64_t kVersion = 5;
 constexpr std::uint64_t kByteOrderMark = 0x0102030405060708ULL;
 constexpr std::size_t kHeaderBytes = sizeof kMagic + 3 * sizeof(std::uint64_t);
 
@@ -162,6 +162,7 @@ void check_fields(Reader& r, const Checkpoint& c) {
   };
   per_node(d.v.size(), "v", false);
   per_node(d.f.size(), "f", false);
+  per_node(d.acceleration.size(), "acceleration", true);
   per_node(d.obstacle_touching.size(), "obstacle_touching", true);
   auto non_negative = [&](long long v, const char* field) {
     if (v < 0) r.fail(fmt::format("'{}' is {}, expected 0 or more", field, v));

@@ -173,6 +173,7 @@ Data allocate_data(const Model& model) {
   d.x = model.rest_position;
   d.v.assign(n, Vec3::Zero());
   d.f.assign(n, Vec3::Zero());
+  if (model.settings.integrator == Integrator::implicit) d.acceleration.assign(n, Vec3::Zero());
   size_t memory_nodes = 0;
   for (const ShapeMemory& m : model.shape_memory) memory_nodes += m.nodes.size();
   d.rotation.assign(memory_nodes, Eigen::Quaterniond::Identity());

@@ -67,6 +67,7 @@ struct FieldNames<Data> {
                                           "x",
                                           "v",
                                           "f",
+                                          "acceleration",
                                           "rotation",
                                           "shape_memory_energy",
                                           "bodies",
