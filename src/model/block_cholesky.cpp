@@ -92,6 +92,21 @@ void row_lists(const BlockFactor& f, std::vector<int>& start, std::vector<int>& 
       column[size_t(fill[size_t(f.row[size_t(e)])]++)] = k;
 }
 
+PaddedBlock padded(const Block3& b) {
+  PaddedBlock p = PaddedBlock::Zero();
+  p.topRows<3>() = b;
+  return p;
+}
+
+// Subtracts from the sums of column j's rows the updates of column k, whose blocks from
+// `first` on lie at or below row j (the first at row j: L_jk).
+void update_from(const BlockFactor& f, int first, int end, std::vector<PaddedBlock>& sum) {
+  const Block3 ljk_transpose = f.value[size_t(first)].topRows<3>().transpose();
+  const PaddedBlock* __restrict value = f.value.data();
+  const int* __restrict row = f.row.data();
+  for (int e = first; e < end; ++e) sum[size_t(row[e])].noalias() -= value[e] * ljk_transpose;
+}
+
 // Left-looking: column j of L from A's and the updates of the columns k < j that reach row j.
 void factorise_numeric(const std::vector<BlockEntry>& a, const std::vector<int>& a_start,
                        BlockFactor& f) {
@@ -99,29 +114,28 @@ void factorise_numeric(const std::vector<BlockEntry>& a, const std::vector<int>&
   std::vector<int> row_start, row_column;
   row_lists(f, row_start, row_column);
   std::vector<int> next(f.start.begin(), f.start.end() - 1);  // per column: its first row >= j
-  std::vector<Block3> sum(size_t(n), Block3::Zero());
-  f.value.assign(f.row.size(), Block3::Zero());
-  f.inverse_diagonal.assign(size_t(n), Block3::Zero());
+  std::vector<PaddedBlock> sum(size_t(n), PaddedBlock::Zero());
+  f.value.assign(f.row.size(), PaddedBlock::Zero());
+  f.inverse_diagonal.assign(size_t(n), PaddedBlock::Zero());
+  f.inverse_transpose.assign(size_t(n), PaddedBlock::Zero());
   for (int j = 0; j < n; ++j) {
     sum[size_t(j)].setZero();
     for (int e = f.start[size_t(j)]; e < f.start[size_t(j) + 1]; ++e)
       sum[size_t(f.row[size_t(e)])].setZero();
     for (int e = a_start[size_t(j)]; e < a_start[size_t(j) + 1]; ++e)
-      sum[size_t(a[size_t(e)].row)] += a[size_t(e)].value;
+      sum[size_t(a[size_t(e)].row)].topRows<3>() += a[size_t(e)].value;
     for (int r = row_start[size_t(j)]; r < row_start[size_t(j) + 1]; ++r) {
       const int k = row_column[size_t(r)];
-      const int first = next[size_t(k)]++;
-      const Block3 ljk = f.value[size_t(first)];
-      for (int e = first; e < f.start[size_t(k) + 1]; ++e)
-        sum[size_t(f.row[size_t(e)])].noalias() -= f.value[size_t(e)] * ljk.transpose();
+      update_from(f, next[size_t(k)]++, f.start[size_t(k) + 1], sum);
     }
-    const Eigen::LLT<Block3> diagonal(sum[size_t(j)]);
+    const Eigen::LLT<Block3> diagonal(sum[size_t(j)].topRows<3>());
     if (diagonal.info() != Eigen::Success)
       throw std::runtime_error("the implicit step's matrix is not positive definite");
     const Block3 inverse = Block3(diagonal.matrixL()).inverse();
-    f.inverse_diagonal[size_t(j)] = inverse;
+    f.inverse_diagonal[size_t(j)] = padded(inverse);
+    f.inverse_transpose[size_t(j)] = padded(inverse.transpose());
     for (int e = f.start[size_t(j)]; e < f.start[size_t(j) + 1]; ++e)
-      f.value[size_t(e)] = sum[size_t(f.row[size_t(e)])] * inverse.transpose();
+      f.value[size_t(e)].noalias() = sum[size_t(f.row[size_t(e)])] * inverse.transpose();
   }
 }
 
@@ -152,6 +166,7 @@ BlockFactor analyse_blocks(int blocks, const std::vector<std::pair<int, int>>& p
   }
   for (int j = 0; j < blocks; ++j) a_start[size_t(j) + 1] += a_start[size_t(j)];
   analyse(a_row, a_start, most, f);
+  f.rhs.assign(size_t(blocks), Eigen::Vector4d::Zero());
   return f;
 }
 
@@ -163,24 +178,60 @@ void factorise_blocks(BlockFactor& f, std::vector<BlockEntry> entries) {
   factorise_numeric(a, a_start, f);
 }
 
-void solve_blocks(const BlockFactor& f, double* x) {
-  using Map3 = Eigen::Map<Eigen::Vector3d>;
-  const int n = f.blocks;
+namespace {
+
+// b v over four rows (the fourth 0): three broadcasts of v's entries times b's columns.
+inline Eigen::Vector4d times(const PaddedBlock& b, const Eigen::Vector4d& v) {
+  return b.col(0) * v[0] + b.col(1) * v[1] + b.col(2) * v[2];
+}
+
+// L y = x: column by column, each block's column a four-wide multiply-add into its row.
+void forward(const BlockFactor& f, Eigen::Vector4d* __restrict y) {
   const int* __restrict start = f.start.data();
   const int* __restrict row = f.row.data();
-  const Block3* __restrict value = f.value.data();
-  for (int j = 0; j < n; ++j) {  // L y = x
-    Map3 xj(x + 3 * j);
-    const Eigen::Vector3d yj = f.inverse_diagonal[size_t(j)] * xj;
-    xj = yj;
-    for (int e = start[j]; e < start[j + 1]; ++e) Map3(x + 3 * row[e]).noalias() -= value[e] * yj;
-  }
-  for (int j = n - 1; j >= 0; --j) {  // L^T x = y
-    Eigen::Vector3d xj = Map3(x + 3 * j);
+  const PaddedBlock* __restrict value = f.value.data();
+  for (int j = 0; j < f.blocks; ++j) {
+    y[j] = times(f.inverse_diagonal[size_t(j)], y[j]);
+    const double y0 = y[j][0], y1 = y[j][1], y2 = y[j][2];
     for (int e = start[j]; e < start[j + 1]; ++e)
-      xj.noalias() -= value[e].transpose() * Map3(x + 3 * row[e]);
-    Map3(x + 3 * j) = f.inverse_diagonal[size_t(j)].transpose() * xj;
+      y[row[e]] -= value[e].col(0) * y0 + value[e].col(1) * y1 + value[e].col(2) * y2;
   }
+}
+
+// sum += b's columns times v, lane by lane.
+void add_products(const PaddedBlock& b, const Eigen::Vector4d& v, PaddedBlock& sum) {
+  for (int c = 0; c < 3; ++c) sum.col(c) += b.col(c).cwiseProduct(v);
+}
+
+// L^T x = y: per column, the products of its blocks' columns with their rows summed lane by
+// lane in two interleaved sets (two chains of additions instead of one), then across.
+void backward(const BlockFactor& f, Eigen::Vector4d* __restrict y) {
+  const int* __restrict start = f.start.data();
+  const int* __restrict row = f.row.data();
+  const PaddedBlock* __restrict value = f.value.data();
+  for (int j = f.blocks - 1; j >= 0; --j) {
+    PaddedBlock even = PaddedBlock::Zero(), odd = PaddedBlock::Zero();
+    int e = start[j];
+    for (; e + 1 < start[j + 1]; e += 2) {
+      add_products(value[e], y[row[e]], even);
+      add_products(value[e + 1], y[row[e + 1]], odd);
+    }
+    if (e < start[j + 1]) add_products(value[e], y[row[e]], even);
+    Eigen::Vector4d rest = y[j];
+    rest.head<3>() -= (even + odd).colwise().sum().transpose();
+    y[j] = times(f.inverse_transpose[size_t(j)], rest);
+  }
+}
+
+}  // namespace
+
+void solve_blocks(const BlockFactor& f, double* x) {
+  Eigen::Vector4d* y = f.rhs.data();
+  for (int j = 0; j < f.blocks; ++j) y[j] << x[3 * j], x[3 * j + 1], x[3 * j + 2], 0.0;
+  forward(f, y);
+  backward(f, y);
+  for (int j = 0; j < f.blocks; ++j)
+    for (int a = 0; a < 3; ++a) x[3 * j + a] = y[j][a];
 }
 
 }  // namespace phymul
