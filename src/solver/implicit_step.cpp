@@ -43,6 +43,15 @@ using SmallVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxVolumes, 1>;
 // derivative and the volumes' curvature, and where those exceed it (a soft mode of the
 // shape memory) the full correction overshoots.
 constexpr double kShrink = 0.7, kShortestStep = 1.0 / 16.0;
+// An overshooting mode need not make the residual grow: at alpha = 1 it may shrink by 0.7 to
+// 0.95 a solve for dozens of solves (the muscle, the bladder on its floor), and by 0.4 to 0.6
+// at alpha = 0.7. So a step still at alpha = 1 whose residual fell by less than kSlowRatio at
+// its kSlowFrom-th solve or later takes kShrink from then on. Earlier, a slow solve is more
+// often the contacts or the first guess settling (the prostate's steps, 1 to 4 solves, keep
+// alpha = 1); a second shrink, or one after the residual grew, slowed the undershooting modes
+// more than it gained (the hanging cube at 100 times its dt: twice the solves).
+constexpr int kSlowFrom = 3;
+constexpr double kSlowRatio = 0.5;
 
 // m: a node this close to an obstacle's surface (or inside it) touches it. The projection puts
 // it on the surface to round-off; the volume projection after it moves it by second-order
@@ -587,6 +596,14 @@ void first_guess(const Model& model, Data& d, double h, double load_time,
   apply_position_constraints(model, d.controls, w, d.x, load_time, w.f_start);
 }
 
+// The share of its corrections a step takes next, from its largest residual now and before
+// the last solve, after `solves` solves.
+double next_alpha(double alpha, double residual, double previous, int solves) {
+  if (residual > previous) return std::max(kShrink * alpha, kShortestStep);
+  if (alpha == 1.0 && solves >= kSlowFrom && residual > kSlowRatio * previous) return kShrink;
+  return alpha;
+}
+
 // One backward-Euler step (step_implicit), its first guess continuing `acceleration` (empty:
 // none, as in the static solver's steps from rest), which it then sets to the step's.
 void backward_euler_step(const Model& model, Data& d, double h, double load_time, int most,
@@ -602,7 +619,7 @@ void backward_euler_step(const Model& model, Data& d, double h, double load_time
     compute_forces(model, d, load_time);  // the local step: each node's rotation
     s.residual_force = residual_at(model, d, s, h, load_time);
     if (s.residual_force <= tolerance || s.iterations >= most) break;
-    if (s.residual_force > previous) alpha = std::max(kShrink * alpha, kShortestStep);
+    alpha = next_alpha(alpha, s.residual_force, previous, s.iterations);
     previous = s.residual_force;
     global_step(model, d, s, load_time);
     for (int a = 0; a < 3; ++a) {
