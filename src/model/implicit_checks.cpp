@@ -1,6 +1,6 @@
-// What `integrator: implicit` cannot take yet (finite elements,
-// obstacles with friction, contact pairs, needles), found in the scene before compiling: one
-// diagnostic each, at the field.
+// What `integrator: implicit` cannot take yet (finite elements, obstacles with friction,
+// contact pairs, needles), found in the scene before compiling: one diagnostic each, at the
+// field.
 #include <fmt/format.h>
 
 #include <string>
@@ -25,9 +25,8 @@ std::string implicit_static_at(const SimulationSpec& s) {
 
 constexpr const char* kTakes =
     "it takes elastic shape-memory, active and rigid objects with gravity, 'force' loads, "
-    "pressures, 'fixed', "
-    "'displacement' and 'spring' constraints, stitches, doubled nodes, volume constraints and "
-    "frictionless obstacles; use 'integrator: verlet'";
+    "pressures, 'fixed', 'displacement' and 'spring' constraints, stitches, doubled nodes, "
+    "volume constraints and frictionless obstacles; use 'integrator: verlet'";
 
 template <class Spec>
 void refuse_all(const std::vector<Spec>& specs, const char* what, const std::string& at,

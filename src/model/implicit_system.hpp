@@ -38,8 +38,8 @@ struct ImplicitSystem {
   std::vector<std::array<int, 3>> block_unknown;
   std::vector<int> block_of_node;  // -1: every axis held
   // Per rigid body, its unknowns on each axis (free bodies; -1 for driven ones): the motion of
-  // its centre and its turn (a rotation vector in the world frame), after the nodes'; and its
-  // state at the step's start.
+  // its centre and its turn (a rotation vector in the body's principal frame), after the nodes';
+  // and its state at the step's start.
   struct Body {
     std::array<int, 3> move{-1, -1, -1}, turn{-1, -1, -1};
     Eigen::Vector3d center, momentum, angular_momentum;

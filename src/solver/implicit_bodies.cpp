@@ -1,6 +1,7 @@
 #include "solver/implicit_bodies.hpp"
 
 #include <algorithm>
+#include <utility>
 
 #include "model/workspace.hpp"
 #include "solver/rigid.hpp"
@@ -15,6 +16,15 @@ Vec3 turn_between(const Eigen::Quaterniond& from, const Eigen::Quaterniond& to) 
 }
 
 bool is_free(const ImplicitSystem::Body& b) { return b.move[0] >= 0; }
+
+// A body's (move, turn) values of a field given per axis over the unknowns.
+std::pair<Vec3, Vec3> body_values(const ImplicitSystem::Body& b,
+                                  const std::array<Eigen::VectorXd, 3>& field) {
+  Vec3 move, turn;
+  for (int a = 0; a < 3; ++a)
+    move[a] = field[size_t(a)][b.move[size_t(a)]], turn[a] = field[size_t(a)][b.turn[size_t(a)]];
+  return {move, turn};
+}
 
 }  // namespace
 
@@ -61,10 +71,7 @@ double largest_body_residual2(const Model& model, const ImplicitSystem& s) {
   for (size_t k = 0; k < s.body.size(); ++k) {
     const ImplicitSystem::Body& b = s.body[k];
     if (!is_free(b)) continue;
-    Vec3 force, moment;
-    for (int a = 0; a < 3; ++a)
-      force[a] = s.residual[size_t(a)][b.move[size_t(a)]],
-      moment[a] = s.residual[size_t(a)][b.turn[size_t(a)]];
+    const auto [force, moment] = body_values(b, s.residual);
     const double size = model.rigid_bodies[k].size;
     largest2 = std::max({largest2, force.squaredNorm(), moment.squaredNorm() / (size * size)});
   }
@@ -87,10 +94,7 @@ void move_bodies(const Model& model, Data& d, const ImplicitSystem& s, double al
   for (size_t k = 0; k < s.body.size(); ++k) {
     const ImplicitSystem::Body& b = s.body[k];
     if (!is_free(b)) continue;
-    Vec3 move, turn;
-    for (int a = 0; a < 3; ++a)
-      move[a] = s.correction[size_t(a)][b.move[size_t(a)]],
-      turn[a] = s.correction[size_t(a)][b.turn[size_t(a)]];
+    const auto [move, turn] = body_values(b, s.correction);
     RigidBodyState& now = d.bodies[k];
     now.center += alpha * move;
     const double angle = alpha * turn.norm();
