@@ -36,10 +36,6 @@ Vec3 closest_barycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3
   return {1 - v - w, v, w};
 }
 
-namespace {
-
-// Area-weighted vertex normals of a closed surface: a smooth outward field whose sign test
-// is right at edges and corners too, where a single face normal is not.
 void vertex_normals(const std::vector<Triangle>& faces, const std::vector<int>& nodes,
                     std::span<const Vec3> x, std::vector<Vec3>& normal) {
   for (int i : nodes) normal[size_t(i)].setZero();
@@ -50,19 +46,12 @@ void vertex_normals(const std::vector<Triangle>& faces, const std::vector<int>& 
   for (int i : nodes) normal[size_t(i)].normalize();
 }
 
-// What the position stage does with one node: is it inside, and where is it closest.
-struct Penetration {
-  double depth = 0.0;  // m, negative inside
-  int face = -1;
-  Vec3 weights = Vec3::Zero(), normal = Vec3::Zero();
-};
-
-Penetration find_penetration(const ContactPair& pair, int other, TriangleHash& hash,
-                             const std::vector<Vec3>& vertex_normal, std::span<const Vec3> x,
-                             const Vec3& p, double margin) {
+SurfacePoint nearest_surface_point(const ContactPair& pair, int other, TriangleHash& hash,
+                                   const std::vector<Vec3>& vertex_normal, std::span<const Vec3> x,
+                                   const Vec3& p, double margin) {
   const std::vector<Triangle>& faces = pair.faces[size_t(other)];
   double best = margin * margin;
-  Penetration found;
+  SurfacePoint found;
   hash.around(p, [&](int k) {
     const Triangle& t = faces[size_t(k)];
     const Vec3 w = closest_barycentric(p, x[t[0]], x[t[1]], x[t[2]]);
@@ -84,14 +73,17 @@ Penetration find_penetration(const ContactPair& pair, int other, TriangleHash& h
   // part would make the node creep along the surface for ever.
   const Vec3 smooth = w[0] * vertex_normal[size_t(t[0])] + w[1] * vertex_normal[size_t(t[1])] +
                       w[2] * vertex_normal[size_t(t[2])];
-  if ((p - q).dot(smooth) >= 0.0 || distance == 0.0) {
-    found.depth = distance;  // outside, or exactly on the surface
-    return found;
+  if (distance == 0.0) {
+    found.normal = (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]).normalized();
+    return found;  // exactly on the surface
   }
-  found.depth = -distance;
-  found.normal = (q - p) / distance;
+  const bool outside = (p - q).dot(smooth) >= 0.0;
+  found.depth = outside ? distance : -distance;
+  found.normal = (outside ? Vec3(p - q) : Vec3(q - p)) / distance;
   return found;
 }
+
+namespace {
 
 // n . (W n) for a per-axis inverse mass W.
 double along(const Vec3& inverse_mass, const Vec3& n) {
@@ -123,8 +115,8 @@ void apply_deformable_contacts(const Model& model, std::span<Vec3> x, Workspace&
           if ((x[size_t(p)].array() < lo.array()).any() ||
               (x[size_t(p)].array() > hi.array()).any())
             continue;
-          const Penetration hit =
-              find_penetration(pair, other, hash, work.vertex_normal, x, x[p], pair.margin);
+          const SurfacePoint hit =
+              nearest_surface_point(pair, other, hash, work.vertex_normal, x, x[p], pair.margin);
           if (hit.face < 0 || hit.depth >= 0.0) continue;
           const Triangle& t = pair.faces[size_t(other)][size_t(hit.face)];
           const Vec3& n = hit.normal;

@@ -15,6 +15,24 @@ namespace phymul {
 // Closest point of triangle (a, b, c) to p, as barycentric weights (sum 1, each >= 0).
 Vec3 closest_barycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
 
+// Area-weighted vertex normals of a closed surface (normal, at its nodes): a smooth outward
+// field whose sign test is right at edges and corners too, where a single face normal is not.
+void vertex_normals(const std::vector<Triangle>& faces, const std::vector<int>& nodes,
+                    std::span<const Vec3> x, std::vector<Vec3>& normal);
+
+// The point of pair side `other`'s surface closest to p, within margin (face -1: none), with
+// p's signed distance to it (m, negative inside: the sign along the interpolated vertex
+// normals, filled by vertex_normals) and the way out: unit, the distance's gradient ((q - p)/d
+// inside, (p - q)/d outside), the face's normal for p on the face.
+struct SurfacePoint {
+  double depth = 0.0;
+  int face = -1;
+  Vec3 weights = Vec3::Zero(), normal = Vec3::Zero();
+};
+SurfacePoint nearest_surface_point(const ContactPair& pair, int other, TriangleHash& hash,
+                                   const std::vector<Vec3>& vertex_normal, std::span<const Vec3> x,
+                                   const Vec3& p, double margin);
+
 // Position stage: Gauss-Seidel sweeps over the surface nodes of every pair; a node inside the
 // other surface (signed distance along the interpolated vertex normal below zero) and its
 // closest triangle move apart along that normal, in proportion to their inverse masses, until

@@ -1,6 +1,6 @@
 // What `integrator: implicit` cannot take yet (finite elements, obstacles with friction,
-// contact pairs, needles), found in the scene before compiling: one diagnostic each, at the
-// field.
+// contacts with a rigid object, needles), found in the scene before compiling: one diagnostic
+// each, at the field.
 #include <fmt/format.h>
 
 #include <string>
@@ -26,7 +26,8 @@ std::string implicit_static_at(const SimulationSpec& s) {
 constexpr const char* kTakes =
     "it takes elastic shape-memory, active and rigid objects with gravity, 'force' loads, "
     "pressures, 'fixed', 'displacement' and 'spring' constraints, stitches, doubled nodes, "
-    "volume constraints and frictionless obstacles; use 'integrator: verlet'";
+    "volume constraints, frictionless obstacles and contacts between deformable objects; use "
+    "'integrator: verlet'";
 
 template <class Spec>
 void refuse_all(const std::vector<Spec>& specs, const char* what, const std::string& at,
@@ -57,7 +58,14 @@ void check_implicit_scene(const Scene& scene, std::vector<Diagnostic>& problems)
                               "implicit'{}: {}",
                               o.name.empty() ? fmt::format("obstacle{}", k) : o.name, o.friction,
                               at, kTakes)});
-  refuse_all(scene.contacts, "contacts", at, problems);
+  for (const ContactSpec& c : scene.contacts)
+    for (const std::string& name : c.objects)
+      for (const ObjectSpec& o : scene.objects)
+        if (o.name == name && o.type == ObjectType::rigid)
+          problems.push_back(
+              {c.loc, fmt::format("contacts with the rigid object '{}' are not supported by "
+                                  "'integrator: implicit'{}: {}",
+                                  name, at, kTakes)});
   refuse_all(scene.needles, "needles", at, problems);
 }
 

@@ -55,18 +55,37 @@ struct ImplicitSystem {
   // P^-1 times it, solved with the coupled factor.
   std::vector<std::array<Eigen::VectorXd, 3>> gradient, solved_gradient;
   std::vector<std::array<Eigen::VectorXd, 3>> rest_gradient, rest_solved;
-  // Frictionless obstacles (solver/implicit_contacts.cpp): the nodes an obstacle pushes this
-  // iteration and the way it pushes, each a constraint push . dx = 0 of the global solve.
+  // Frictionless contacts (solver/implicit_contacts.cpp): each row a constraint of the global
+  // solve, push . (sum of weight_k dx_k) = -gap over up to four nodes. An obstacle's row: the
+  // node it pushes, weight 1. A contact pair's (solver/implicit_pairs.cpp): the node, then
+  // the other side's triangle with minus its barycentric weights, push the way out.
   struct Contact {
-    int node = 0;
+    std::array<int, 4> nodes{0, 0, 0, 0};
+    std::array<double, 4> weights{1.0, 0.0, 0.0, 0.0};
+    int count = 1;
     Eigen::Vector3d push = Eigen::Vector3d::Zero();
-    double gap = 0.0;  // m, along push: how far the node is clear of the surface
-    int obstacle = 0;
-    double into = 0.0;  // N: the residual's push along it (< 0: into the obstacle)
+    double gap = 0.0;              // m, along push: how far the node is clear of the surface
+    int obstacle = -1, pair = -1;  // whose row (the other -1); side: the node's in the pair
+    int side = 0;
+    double into = 0.0;  // N: the residual's push along the row (< 0: into the surface)
   };
   std::vector<Contact> active;
   std::vector<double> touching_gap;    // per Workspace::contacts entry: its gap
   std::vector<int> touching_obstacle;  // and its obstacle
+  // The contact pairs' rows found this iteration (before `active` takes them), and the
+  // least-squares fit of the volumes' pressures and their forces to the residual: its normal
+  // equations (row-major), right-hand side, rows taken, and per row its force (N, >= 0).
+  std::vector<Contact> pair_rows;
+  // Per contact pair and side, the faces around each node (by global id, CSR): the faces a
+  // node touching an edge or a corner of that side's surface gets a row for.
+  struct FaceRing {
+    std::vector<int> start, faces;
+  };
+  std::vector<std::array<FaceRing, 2>> face_rings;
+  std::vector<double> fit, fit_rhs, pair_force;
+  std::vector<int> fit_rows;
+  // Per node, the contact pair whose row the step's last solve held (-1: none), as held_by.
+  std::vector<int> pair_held;
   // Columns of P^-1 at those nodes' unknowns, kept while the factor is: per axis owning a
   // factor (owner: the first axis sharing it), each unknown's slot (-1: none) and the slots.
   // With the coupled factor, in axis 0's: each block's slot, three columns (its axes) a slot,
@@ -77,6 +96,7 @@ struct ImplicitSystem {
   std::array<int, 3> columns_used{0, 0, 0};
   std::unique_ptr<double[]> coupled_columns;  // uninitialised: pages touched as slots fill
   int column_capacity = 0;
+  int row_capacity = 0;  // most rows (obstacles' and pairs') a solve takes
   // The Schur complement of volumes and contacts, row-major, and its right-hand side; the
   // whole system (all touching nodes) and its right-hand side, from which the solves of the
   // contacts still held are taken; per touching node whether it is held, and its multiplier.

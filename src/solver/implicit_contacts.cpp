@@ -6,13 +6,16 @@
 #include <string>
 
 #include "model/block_cholesky.hpp"
+#include "solver/implicit_pairs.hpp"
 #include "solver/implicit_solve.hpp"
 
 namespace phymul {
 namespace {
 
-// Most nodes touching obstacles at once: columns of P^-1 kept per factor (each unknowns long).
+// Most nodes in contact rows at once: columns of P^-1 kept per factor (each unknowns long).
 constexpr int kMaxContactColumns = 512;
+// Most contact rows (obstacles' and pairs') a solve takes: its dense system is this square.
+constexpr int kMaxContactRows = 512;
 // Most values the coupled factor's column cache holds (256 MB): 9 blocks' worth a node.
 constexpr size_t kMostColumnValues = size_t(1) << 25;
 
@@ -65,87 +68,127 @@ const double* coupled_column(const ImplicitSystem& s, int i, int a) {
          size_t(a) * 3 * size_t(s.coupled->blocks);
 }
 
-void check_capacity(const ImplicitSystem& s) {
-  if (int(s.active.size()) > s.column_capacity)
-    throw std::runtime_error(
-        "the implicit step holds at most " + std::to_string(s.column_capacity) +
-        " nodes against obstacles at once; " + std::to_string(s.active.size()) +
-        " touch now: use 'integrator: verlet'");
+// Calls visit(key) for each distinct key(node) >= 0 over the active rows' nodes (each key
+// once), marking seen keys in `slot` by -2 and restoring them.
+template <class Key, class Visit>
+void each_missing(const ImplicitSystem& s, std::vector<int>& slot, Key key, Visit visit) {
+  for (const ImplicitSystem::Contact& c : s.active)
+    for (int k = 0; k < c.count; ++k)
+      if (const int b = key(c.nodes[size_t(k)]); b >= 0 && slot[size_t(b)] == -1) {
+        slot[size_t(b)] = -2;
+        visit(b);
+      }
+  for (const ImplicitSystem::Contact& c : s.active)
+    for (int k = 0; k < c.count; ++k)
+      if (const int b = key(c.nodes[size_t(k)]); b >= 0 && slot[size_t(b)] == -2)
+        slot[size_t(b)] = -1;
 }
 
-// The coupled factor's columns for every touching node's block; a full cache starts again.
-void ensure_coupled_columns(ImplicitSystem& s) {
-  std::vector<int>& slot = s.column_slot[0];
+[[noreturn]] void too_many(const ImplicitSystem& s, int rows, int nodes) {
+  throw std::runtime_error("the implicit step takes at most " + std::to_string(s.row_capacity) +
+                           " contact rows over " + std::to_string(s.column_capacity) +
+                           " nodes at once; " + std::to_string(rows) + " rows over " +
+                           std::to_string(nodes) + " nodes touch now: use 'integrator: verlet'");
+}
+
+// P^-1's columns at the keys (blocks, or one axis's unknowns) the active rows need in a cache
+// of `used` slots, computed by `compute`; a full cache starts again empty.
+template <class Key, class Compute>
+void ensure_cached(ImplicitSystem& s, std::vector<int>& slot, int& used, Key key, Compute compute) {
   int missing = 0;
-  for (const ImplicitSystem::Contact& c : s.active)
-    if (slot[size_t(s.block_of_node[size_t(c.node)])] < 0) ++missing;
+  each_missing(s, slot, key, [&](int) { ++missing; });
   if (missing == 0) return;
-  if (s.columns_used[0] + missing > s.column_capacity) {
+  if (used + missing > s.column_capacity) {
     std::fill(slot.begin(), slot.end(), -1);
-    s.columns_used[0] = 0;
+    used = 0;
+    missing = 0;
+    each_missing(s, slot, key, [&](int) { ++missing; });
+    if (missing > s.column_capacity) too_many(s, int(s.active.size()), missing);
   }
-  for (const ImplicitSystem::Contact& c : s.active)
-    if (const int b = s.block_of_node[size_t(c.node)]; slot[size_t(b)] < 0)
-      compute_coupled_columns(s, b);
+  each_missing(s, slot, key, compute);
 }
 
-// Every active contact's columns in the caches; a full cache starts again empty.
+// Every active row's columns in the caches.
 void ensure_columns(ImplicitSystem& s) {
-  check_capacity(s);
-  if (s.coupled) return ensure_coupled_columns(s);
-  for (int o = 0; o < 3; ++o) {
-    if (s.owner[size_t(o)] != o) continue;
-    std::vector<int>& slot = s.column_slot[size_t(o)];
-    int missing = 0;
-    for (const ImplicitSystem::Contact& c : s.active)
-      if (const int u = s.unknown[size_t(o)][size_t(c.node)]; u >= 0 && slot[size_t(u)] < 0)
-        ++missing;
-    if (missing == 0) continue;
-    if (s.columns_used[size_t(o)] + missing > s.column_capacity) {
-      std::fill(slot.begin(), slot.end(), -1);
-      s.columns_used[size_t(o)] = 0;
-    }
-    for (const ImplicitSystem::Contact& c : s.active)
-      if (const int u = s.unknown[size_t(o)][size_t(c.node)]; u >= 0 && slot[size_t(u)] < 0)
-        compute_column(s, o, u);
+  if (int(s.active.size()) > s.row_capacity) too_many(s, int(s.active.size()), 0);
+  if (s.coupled) {
+    ensure_cached(
+        s, s.column_slot[0], s.columns_used[0], [&](int i) { return s.block_of_node[size_t(i)]; },
+        [&](int b) { compute_coupled_columns(s, b); });
+    return;
   }
+  for (int o = 0; o < 3; ++o)
+    if (s.owner[size_t(o)] == o)
+      ensure_cached(
+          s, s.column_slot[size_t(o)], s.columns_used[size_t(o)],
+          [&](int i) { return s.unknown[size_t(o)][size_t(i)]; },
+          [&](int u) { compute_column(s, o, u); });
 }
 
-// push . v over the node's free axes, v given per axis over the unknowns.
+}  // namespace
+
+// The row's g . v over its nodes' free axes, v given per axis over the unknowns.
 double along(const ImplicitSystem& s, const ImplicitSystem::Contact& c,
              const std::array<Eigen::VectorXd, 3>& v) {
   double sum = 0.0;
-  for (int a = 0; a < 3; ++a)
-    if (const int u = s.unknown[size_t(a)][size_t(c.node)]; u >= 0)
-      sum += c.push[a] * v[size_t(a)][u];
-  return sum;
-}
-
-// push_c^T P^-1 push_d over the free axes, the coupled factor's axes coupled.
-double coupled_coupling(const ImplicitSystem& s, const ImplicitSystem::Contact& c,
-                        const ImplicitSystem::Contact& d) {
-  const int at = 3 * s.coupled->position[size_t(s.block_of_node[size_t(d.node)])];
-  double sum = 0.0;
-  for (int a = 0; a < 3; ++a) {
-    if (s.unknown[size_t(a)][size_t(c.node)] < 0) continue;
-    const double* col = coupled_column(s, c.node, a);
-    for (int b = 0; b < 3; ++b)
-      if (s.unknown[size_t(b)][size_t(d.node)] >= 0) sum += c.push[a] * d.push[b] * col[at + b];
+  for (int k = 0; k < c.count; ++k) {
+    const int i = c.nodes[size_t(k)];
+    double node = 0.0;
+    for (int a = 0; a < 3; ++a)
+      if (const int u = s.unknown[size_t(a)][size_t(i)]; u >= 0)
+        node += c.push[a] * v[size_t(a)][u];
+    sum += c.weights[size_t(k)] * node;
   }
   return sum;
 }
 
-// push_c^T P^-1 push_d over the free axes.
+namespace {
+
+// push_c^T P^-1 push_d between node i of one row and node j of another, over the free axes,
+// the coupled factor's axes coupled.
+double coupled_coupling(const ImplicitSystem& s, const Eigen::Vector3d& pc, int i,
+                        const Eigen::Vector3d& pd, int j) {
+  const int bi = s.block_of_node[size_t(i)], bj = s.block_of_node[size_t(j)];
+  if (bi < 0 || bj < 0) return 0.0;  // a node every axis of which is held
+  const int at = 3 * s.coupled->position[size_t(bj)];
+  double sum = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    if (s.unknown[size_t(a)][size_t(i)] < 0) continue;
+    const double* col = coupled_column(s, i, a);
+    for (int b = 0; b < 3; ++b)
+      if (s.unknown[size_t(b)][size_t(j)] >= 0) sum += pc[a] * pd[b] * col[at + b];
+  }
+  return sum;
+}
+
+// The same with the per-axis factors.
+double axis_coupling(const ImplicitSystem& s, const Eigen::Vector3d& pc, int i,
+                     const Eigen::Vector3d& pd, int j) {
+  double sum = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    const int u = s.unknown[size_t(a)][size_t(i)], w = s.unknown[size_t(a)][size_t(j)];
+    if (u >= 0 && w >= 0) sum += pc[a] * pd[a] * column(s, a, u)[w];
+  }
+  return sum;
+}
+
+// g_c^T P^-1 g_d over the rows' nodes.
 double coupling(const ImplicitSystem& s, const ImplicitSystem::Contact& c,
                 const ImplicitSystem::Contact& d) {
-  if (s.coupled) return coupled_coupling(s, c, d);
   double sum = 0.0;
-  for (int a = 0; a < 3; ++a) {
-    const int u = s.unknown[size_t(a)][size_t(c.node)], w = s.unknown[size_t(a)][size_t(d.node)];
-    if (u >= 0 && w >= 0) sum += c.push[a] * d.push[a] * column(s, a, u)[w];
+  for (int k = 0; k < c.count; ++k) {
+    const int i = c.nodes[size_t(k)];
+    for (int l = 0; l < d.count; ++l) {
+      const int j = d.nodes[size_t(l)];
+      const double w = c.weights[size_t(k)] * d.weights[size_t(l)];
+      sum += w * (s.coupled ? coupled_coupling(s, c.push, i, d.push, j)
+                            : axis_coupling(s, c.push, i, d.push, j));
+    }
   }
   return sum;
 }
+
+}  // namespace
 
 // S mu = rhs in place (S row-major n x n, symmetric positive semi-definite) by Cholesky; a
 // row dependent on the earlier ones (a pivot at round-off) gets mu = 0.
@@ -175,6 +218,8 @@ void solve_dense(double* S, double* rhs, int n) {
     rhs[i] = S[i * n + i] > 0.0 ? e / S[i * n + i] : 0.0;
   }
 }
+
+namespace {
 
 double dot3(const std::array<Eigen::VectorXd, 3>& p, const std::array<Eigen::VectorXd, 3>& q) {
   return p[0].dot(q[0]) + p[1].dot(q[1]) + p[2].dot(q[2]);
@@ -246,28 +291,37 @@ bool release_tensile(ImplicitSystem& s, int volumes) {
   return released;
 }
 
-// correction -= mu P^-1 push at the contact's node.
+// correction -= mu P^-1 g over the row's nodes.
 void subtract_column(ImplicitSystem& s, const ImplicitSystem::Contact& cc, double mu) {
-  for (int a = 0; a < 3; ++a) {
-    const int u = s.unknown[size_t(a)][size_t(cc.node)];
-    if (u < 0 || cc.push[a] == 0.0) continue;
-    const double scale = mu * cc.push[a];
-    if (s.coupled) {
-      const double* col = coupled_column(s, cc.node, a);
-      const BlockFactor& f = *s.coupled;
-      for (int b = 0; b < f.blocks; ++b)
-        for (int k = 0; k < 3; ++k)
-          if (const int v = s.block_unknown[size_t(b)][size_t(k)]; v >= 0)
-            s.correction[size_t(k)][v] -= scale * col[3 * f.position[size_t(b)] + k];
-      continue;
+  for (int k = 0; k < cc.count; ++k)
+    for (int a = 0; a < 3; ++a) {
+      const int i = cc.nodes[size_t(k)];
+      const int u = s.unknown[size_t(a)][size_t(i)];
+      if (u < 0 || cc.push[a] == 0.0) continue;
+      const double scale = mu * cc.weights[size_t(k)] * cc.push[a];
+      if (s.coupled) {
+        const double* col = coupled_column(s, i, a);
+        const BlockFactor& f = *s.coupled;
+        for (int b = 0; b < f.blocks; ++b)
+          for (int k = 0; k < 3; ++k)
+            if (const int v = s.block_unknown[size_t(b)][size_t(k)]; v >= 0)
+              s.correction[size_t(k)][v] -= scale * col[3 * f.position[size_t(b)] + k];
+        continue;
+      }
+      const double* col = column(s, a, u);
+      Eigen::VectorXd& out = s.correction[size_t(a)];
+      for (int v = 0; v < int(out.size()); ++v) out[v] -= scale * col[v];
     }
-    const double* col = column(s, a, u);
-    Eigen::VectorXd& out = s.correction[size_t(a)];
-    for (int v = 0; v < int(out.size()); ++v) out[v] -= scale * col[v];
-  }
 }
 
 }  // namespace
+
+size_t pair_node_count(const Model& model) {
+  size_t nodes = 0;
+  for (const ContactPair& pair : model.contact_pairs)
+    nodes += pair.nodes[0].size() + pair.nodes[1].size();
+  return nodes;
+}
 
 void prepare_implicit_contacts(const Model& model, ImplicitSystem& s) {
   s.active.clear();
@@ -283,7 +337,8 @@ void prepare_implicit_contacts(const Model& model, ImplicitSystem& s) {
     s.columns[size_t(a)].clear();
     s.columns_used[size_t(a)] = 0;
   }
-  if (model.obstacles.empty()) return;
+  const size_t pair_nodes = pair_node_count(model);
+  if (model.obstacles.empty() && pair_nodes == 0) return;
   if (s.coupled) {
     prepare_coupled_columns(s);
   } else {
@@ -296,18 +351,28 @@ void prepare_implicit_contacts(const Model& model, ImplicitSystem& s) {
       s.columns[size_t(a)].resize(size_t(s.column_capacity) * size_t(s.unknowns[size_t(a)]));
     }
   }
-  s.active.reserve(size_t(model.node_count()));
-  s.touching_gap.reserve(size_t(model.node_count()) * model.obstacles.size());
-  s.touching_obstacle.reserve(s.touching_gap.capacity());
-  const size_t n = model.volumes.size() + size_t(s.column_capacity);
+  const size_t obstacle_rows = size_t(model.node_count()) * model.obstacles.size();
+  s.pair_rows.clear();
+  if (pair_nodes > 0) prepare_pair_rows(model, s);
+  s.row_capacity = int(std::min(obstacle_rows + s.pair_rows.capacity(), size_t(kMaxContactRows)));
+  s.active.reserve(obstacle_rows + s.pair_rows.capacity());
+  s.touching_gap.reserve(obstacle_rows);
+  s.touching_obstacle.reserve(obstacle_rows);
+  const size_t n = model.volumes.size() + size_t(s.row_capacity);
   s.schur.resize(n * n);
   s.rhs.resize(n);
   s.system.resize(n * n);
   s.system_rhs.resize(n);
   s.multiplier.resize(n);
   s.rows.resize(n);
-  s.held.resize(size_t(s.column_capacity));
+  s.held.resize(size_t(s.row_capacity));
   s.held_by.assign(size_t(model.node_count()), -1);
+  s.pair_held.assign(size_t(model.node_count()), -1);
+  if (pair_nodes == 0) return;
+  s.fit.resize(n * n);
+  s.fit_rhs.resize(n);
+  s.fit_rows.resize(n);
+  s.pair_force.resize(s.pair_rows.capacity());
 }
 
 void constrain_to_contacts(const Model& model, ImplicitSystem& s,
@@ -320,7 +385,10 @@ void constrain_to_contacts(const Model& model, ImplicitSystem& s,
   }
   for (int c = 0; c < contacts; ++c) {
     const ImplicitSystem::Contact& cc = s.active[size_t(c)];
-    s.held_by[size_t(cc.node)] = s.held[size_t(c)] ? cc.obstacle : -1;
+    if (cc.pair >= 0)
+      s.pair_held[size_t(cc.nodes[0])] = s.held[size_t(c)] ? cc.pair : -1;
+    else
+      s.held_by[size_t(cc.nodes[0])] = s.held[size_t(c)] ? cc.obstacle : -1;
   }
   for (int l = 0; l < volumes; ++l)
     for (int a = 0; a < 3; ++a)

@@ -23,11 +23,14 @@
 
 #include "constraints/constraints.hpp"
 #include "constraints/contact.hpp"
+#include "constraints/deformable_contact.hpp"
+#include "constraints/doubled.hpp"
 #include "model/workspace.hpp"
 #include "phymul/forces.hpp"
 #include "solver/implicit_bodies.hpp"
 #include "solver/implicit_contacts.hpp"
 #include "solver/implicit_matrix.hpp"
+#include "solver/implicit_pairs.hpp"
 #include "solver/implicit_solve.hpp"
 
 namespace phymul {
@@ -82,10 +85,20 @@ bool has_free_body(const Model& model) {
                      [](const RigidBody& r) { return !r.driven; });
 }
 
+// Whether a contact pair has a rigid side, whose nodes the bodies' unknowns move.
+bool pair_with_rigid(const Model& model) {
+  return std::any_of(model.contact_pairs.begin(), model.contact_pairs.end(),
+                     [&](const ContactPair& p) {
+                       return std::any_of(p.components.begin(), p.components.end(), [&](int c) {
+                         return model.components[size_t(c)].kind == ObjectType::rigid;
+                       });
+                     });
+}
+
 void refuse_unsupported(const Model& model) {
-  const char* what = !model.explicit_fem.empty()    ? "explicit finite elements"
-                     : with_friction(model)         ? "obstacles with friction"
-                     : !model.contact_pairs.empty() ? "contact pairs"
+  const char* what = !model.explicit_fem.empty() ? "explicit finite elements"
+                     : with_friction(model)      ? "obstacles with friction"
+                     : pair_with_rigid(model)    ? "contact pairs with a rigid object"
                      : model.volumes.size() > size_t(kMaxVolumes)
                          ? "more than 16 volume constraints"
                          : nullptr;
@@ -424,7 +437,8 @@ Vec3 node_value(const ImplicitSystem& s, const std::array<Eigen::VectorXd, 3>& f
 void remove_reactions(const Model& model, Data& d, ImplicitSystem& s) {
   const std::vector<ObstacleContact>& contacts = d.work->contacts;
   const int volumes = int(model.volumes.size());
-  if (volumes > 0) {
+  const bool pairs = !s.pair_rows.empty();
+  if (volumes > 0 || pairs) {
     Small gg(volumes, volumes);
     SmallVector gr(volumes);
     for (int l = 0; l < volumes; ++l) {
@@ -442,17 +456,28 @@ void remove_reactions(const Model& model, Data& d, ImplicitSystem& s) {
               gg(l, m) - gl * node_value(s, s.gradient[size_t(m)], c.node).dot(c.push);
       }
     }
-    const SmallVector p = gg.ldlt().solve(gr);
+    SmallVector p(volumes);
+    if (pairs)
+      fit_pressures_and_pair_forces(model, s, gg.data(), gr.data(), p.data());
+    else
+      p = gg.ldlt().solve(gr);
     for (int l = 0; l < volumes; ++l)
       for (int a = 0; a < 3; ++a) s.residual[size_t(a)] -= p[l] * s.gradient[size_t(l)][size_t(a)];
   }
   std::fill(d.contact_force.begin(), d.contact_force.end(), Vec3::Zero());
   s.active.clear();
+  if (!model.contact_pairs.empty()) take_out_pair_forces(d, s);
   for (size_t k = 0; k < contacts.size(); ++k) {
     const ObstacleContact& c = contacts[k];
     // The solve decides whom it holds.
     const double into = node_value(s, s.residual, c.node).dot(c.push);
-    s.active.push_back({c.node, c.push, s.touching_gap[k], s.touching_obstacle[k], into});
+    ImplicitSystem::Contact row;
+    row.nodes[0] = c.node;
+    row.push = c.push;
+    row.gap = s.touching_gap[k];
+    row.obstacle = s.touching_obstacle[k];
+    row.into = into;
+    s.active.push_back(row);
     if (into >= 0.0) continue;  // pulled away: the obstacle holds nothing
     for (int a = 0; a < 3; ++a)
       if (const int u = s.unknown[size_t(a)][size_t(c.node)]; u >= 0)
@@ -535,6 +560,7 @@ void global_step(const Model& model, Data& d, ImplicitSystem& s, double load_tim
 double residual_at(const Model& model, Data& d, ImplicitSystem& s, double h, double load_time) {
   Workspace& w = *d.work;
   if (!model.obstacles.empty()) find_contacts(model, d, load_time);
+  if (!model.contact_pairs.empty()) find_pair_contacts(model, d, s);
   backward_euler_residual(model, d, h, w.f_start);
   gather(model, d, s, w.f_start, s.residual);
   add_body_inertia(model, d, s, h);
@@ -565,6 +591,18 @@ void keep_touching(const Model& model, Data& d, double load_time) {
             d.work->implicit.held_by.begin());
 }
 
+// The position constraints in the explicit steps' order, contact pairs included (their
+// record, Data::pair_contacts, is scratch here: the residual's fit writes it again).
+void project_positions(const Model& model, Data& d, double load_time) {
+  Workspace& w = *d.work;
+  apply_prescribed(model, d.x, load_time);
+  apply_contacts(model, d.controls, d.x, load_time);
+  if (!model.contact_pairs.empty())
+    apply_deformable_contacts(model, d.x, w, d.pair_contacts, d.dt, w.pair_impulse);
+  project_volumes(model, d.controls, w, d.x, load_time, w.f_start);
+  project_doubled(model, d.x);
+}
+
 // Whether the last step's acceleration is the motion's: its largest inertial force (N) above
 // kStillAcceleration of the tolerance. Below, it is the last step's convergence error, which
 // continuing it would double: the pushed 10^3 cube at rest, 100 times its dt, takes 1.1
@@ -592,8 +630,9 @@ void first_guess(const Model& model, Data& d, double h, double load_time,
     if (!acceleration.empty()) d.x[size_t(i)] += h * h * acceleration[size_t(i)];
   }
   keep_touching(model, d, load_time);
+  if (!model.contact_pairs.empty()) hold_pair_contacts(d, w.implicit);
   start_bodies(model, d, w.implicit, h, load_time);
-  apply_position_constraints(model, d.controls, w, d.x, load_time, w.f_start);
+  project_positions(model, d, load_time);
 }
 
 // The share of its corrections a step takes next, from its largest residual now and before
@@ -629,7 +668,7 @@ void backward_euler_step(const Model& model, Data& d, double h, double load_time
     }
     move_bodies(model, d, s, alpha);
     // Exactly on the volumes (the linearised solve left them off by second-order terms).
-    apply_position_constraints(model, d.controls, w, d.x, load_time, w.f_start);
+    project_positions(model, d, load_time);
     ++s.iterations;
   }
   d.load_time = load_time;

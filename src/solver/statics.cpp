@@ -236,13 +236,16 @@ double max_residual_force(const Model& model, Data& d) {
   Workspace& work = *d.work;
   // f_start holds the residual and x_start the volume gradients: both free between steps.
   std::vector<Vec3>& r = work.f_start;
+  std::copy(d.f.begin(), d.f.end(), r.begin());
+  // The contact pairs' forces are known (the last step's): with them in, the volumes'
+  // pressures are fitted to what they balance, not biased by a contact on their surface.
+  add_deformable_contact_forces(d.pair_contacts, d.dt, r);
   for (int i = 0; i < model.node_count(); ++i)
-    r[i] = d.f[i].cwiseProduct(free_axes(model.inverse_mass[i]));
+    r[i] = r[i].cwiseProduct(free_axes(model.inverse_mass[i]));
   gather_doubled(model, r);
   find_obstacle_contacts(model, d);
   remove_volume_pressures(model, work, d.x, r, work.x_start, /*on_free_axes=*/true, work.contacts);
   remove_contact_forces(work.contacts, r);
-  add_deformable_contact_forces(d.pair_contacts, d.dt, r);
   double largest = 0.0;
   for (int i = 0; i < model.node_count(); ++i) largest = std::max(largest, r[i].norm());
   return std::max(largest, rigid_residual(model, d));
@@ -259,6 +262,7 @@ std::vector<Vec3> support_reactions(const Model& model, const Data& d) {
   for (int k = 0; k < int(model.obstacles.size()); ++k)
     add_touching_nodes(model, d, k, d.time, work.contacts);
   std::vector<Vec3> reaction(d.f);
+  add_deformable_contact_forces(d.pair_contacts, d.dt, reaction);  // known, as in the residual
   std::vector<Vec3> grad(d.x.size(), Vec3::Zero());
   remove_volume_pressures(model, work, d.x, reaction, grad, /*on_free_axes=*/false, work.contacts);
   for (int i = 0; i < model.node_count(); ++i) {
@@ -284,8 +288,10 @@ Vec3 obstacle_force(const Model& model, const Data& d, int obstacle) {
   work.contacts.clear();
   add_touching_nodes(model, d, obstacle, d.time, work.contacts);
   std::vector<Vec3> r(d.f.size()), grad(d.x.size(), Vec3::Zero());
+  r = d.f;
+  add_deformable_contact_forces(d.pair_contacts, d.dt, r);  // known, as in the residual
   for (int i = 0; i < model.node_count(); ++i)
-    r[size_t(i)] = d.f[size_t(i)].cwiseProduct(free_axes(model.inverse_mass[size_t(i)]));
+    r[size_t(i)] = r[size_t(i)].cwiseProduct(free_axes(model.inverse_mass[size_t(i)]));
   remove_volume_pressures(model, work, d.x, r, grad, /*on_free_axes=*/true, work.contacts);
   Vec3 force = Vec3::Zero();
   for (const ObstacleContact& c : work.contacts) force -= r[size_t(c.node)];

@@ -178,6 +178,21 @@ TEST(Simulator, ImplicitStepsWithBodiesAndFibresDoNotAllocate) {
   EXPECT_GT(residual, 0.0);
 }
 
+// Two balls pressed together (examples/two_balls.yaml): the contact pair's rows, their fit
+// and the projection after each solve work in preallocated storage.
+TEST(Simulator, ImplicitStepsWithAContactPairDoNotAllocate) {
+  if (!PHYMUL_COUNT_ALLOCATIONS) GTEST_SKIP() << "allocations are counted in the normal build only";
+  Scene scene = load_scene(testing::source_dir() / "examples" / "two_balls.yaml");
+  scene.simulation.integrator = Integrator::implicit;
+  Simulator sim(compile_scene(scene));
+  sim.set_dt(10.0 * sim.dt());
+  while (sim.data().pair_contact_force[0].norm() == 0.0) sim.step();  // touching
+  const auto [count, residual] = allocations_in_steps(sim);
+  EXPECT_EQ(count, 0);
+  EXPECT_GT(residual, 0.0);
+  EXPECT_GT(sim.data().pair_contact_force[0].norm(), 0.0);
+}
+
 // Surfaces sharing nodes (a prostate stitched to a bladder): the joint volume projection,
 // velocity projection and residual's pressures work in preallocated storage.
 TEST(Simulator, CoupledVolumeStepsDoNotAllocate) {
