@@ -118,7 +118,9 @@ void force_paths(const Simulator& sim, FillingResult& r) {
 }
 
 StaticResult relax_to(Simulator& sim, double load_time) {
-  const StaticResult r = sim.relax(load_time, kMaxIterations);
+  // The scene's own cap where lower (the implicit static solver's hundred steps).
+  const StaticResult r =
+      sim.relax(load_time, std::min(kMaxIterations, sim.model().settings.max_iterations));
   if (!r.converged)
     throw std::runtime_error(fmt::format(
         "prostate study: no equilibrium at load time {:.3g} s after {} iterations (residual "

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include "phymul/scene_io.hpp"
 #include "phymul/studies/prostate.hpp"
@@ -78,6 +80,35 @@ TEST(ProstateCli, TheImplicitStaticSolverFindsTheSameDeformation) {
   const double relaxed = deformation("relaxation"), implicit = deformation("implicit");
   EXPECT_GT(relaxed, 1.0);  // per cent
   EXPECT_NEAR(implicit, relaxed, 1e-5 * relaxed);
+}
+
+// The paper's configuration by the implicit static solver, which takes the organs' contact
+// pair: the prostate on 11.5 N/m side springs (docs/validation.md) finds both fillings'
+// equilibria, the empty bladder's deformation the larger; hanging from a single stitched node
+// at 400 mL there is none, and the run says so after its hundred steps instead of running on.
+TEST(ProstateCli, InThePapersConfigurationTheImplicitSolverFindsEquilibriaOrSaysThereAreNone) {
+  TempDir dir;
+  const std::string paper = fmt::format(
+      "OMP_NUM_THREADS=1 '{}' prostate --support bladder --support-stiffness 11.5 --probe rigid "
+      "--static-solver implicit --no-pictures --no-real-time -q",
+      cli());
+  const auto json = dir.path() / "paper.json";
+  const auto r = run_command(fmt::format("{} --fillings 50,400 -o '{}' --json '{}'", paper,
+                                         (dir.path() / "paper").string(), json.string()));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string text = read_text(json);
+  std::vector<double> deformation;
+  const std::string key = "\"prostate_deformation_pct\": ";
+  for (size_t at = text.find(key); at != std::string::npos; at = text.find(key, at + 1))
+    deformation.push_back(std::stod(text.substr(at + key.size())));
+  ASSERT_EQ(deformation.size(), 2u) << text;
+  EXPECT_GT(deformation[0], 4.0);  // per cent, 50 mL
+  EXPECT_GT(deformation[0], deformation[1]);
+  const auto none = run_command(fmt::format("{} --fillings 400 --stitch-radius 5 -o '{}'", paper,
+                                            (dir.path() / "none").string()));
+  EXPECT_NE(none.exit_code, 0);
+  EXPECT_NE(none.output.find("no equilibrium"), std::string::npos) << none.output;
+  EXPECT_NE(none.output.find("after 100 iterations"), std::string::npos) << none.output;
 }
 
 TEST(ProstateCli, RefusesAFillingOutOfRange) {
