@@ -303,9 +303,9 @@ void subtract_column(ImplicitSystem& s, const ImplicitSystem::Contact& cc, doubl
         const double* col = coupled_column(s, i, a);
         const BlockFactor& f = *s.coupled;
         for (int b = 0; b < f.blocks; ++b)
-          for (int k = 0; k < 3; ++k)
-            if (const int v = s.block_unknown[size_t(b)][size_t(k)]; v >= 0)
-              s.correction[size_t(k)][v] -= scale * col[3 * f.position[size_t(b)] + k];
+          for (int e = 0; e < 3; ++e)
+            if (const int v = s.block_unknown[size_t(b)][size_t(e)]; v >= 0)
+              s.correction[size_t(e)][v] -= scale * col[3 * f.position[size_t(b)] + e];
         continue;
       }
       const double* col = column(s, a, u);
@@ -383,13 +383,13 @@ void constrain_to_contacts(const Model& model, ImplicitSystem& s,
   std::fill(s.held.begin(), s.held.begin() + contacts, char(1));
   while (release_tensile(s, volumes)) {
   }
-  for (int c = 0; c < contacts; ++c) {
-    const ImplicitSystem::Contact& cc = s.active[size_t(c)];
-    if (cc.pair >= 0)
-      s.pair_held[size_t(cc.nodes[0])] = s.held[size_t(c)] ? cc.pair : -1;
-    else
-      s.held_by[size_t(cc.nodes[0])] = s.held[size_t(c)] ? cc.obstacle : -1;
-  }
+  // A node with several rows (faces at an edge, obstacles) stays held while any one is.
+  for (const ImplicitSystem::Contact& cc : s.active)
+    (cc.pair >= 0 ? s.pair_held : s.held_by)[size_t(cc.nodes[0])] = -1;
+  for (int c = 0; c < contacts; ++c)
+    if (const ImplicitSystem::Contact& cc = s.active[size_t(c)]; s.held[size_t(c)])
+      (cc.pair >= 0 ? s.pair_held : s.held_by)[size_t(cc.nodes[0])] =
+          cc.pair >= 0 ? cc.pair : cc.obstacle;
   for (int l = 0; l < volumes; ++l)
     for (int a = 0; a < 3; ++a)
       s.correction[size_t(a)] -= s.multiplier[size_t(l)] * s.solved_gradient[size_t(l)][size_t(a)];

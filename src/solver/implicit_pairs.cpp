@@ -208,10 +208,13 @@ void take_out_pair_forces(Data& d, ImplicitSystem& s) {
         if (const int u = s.unknown[size_t(a)][size_t(row.nodes[size_t(k)])]; u >= 0)
           s.residual[size_t(a)][u] += force * row.weights[size_t(k)] * row.push[a];
     d.pair_contact_force[size_t(row.pair)] += (row.side == 0 ? force : -force) * row.push;
-    if (d.pair_contacts.size() < d.pair_contacts.capacity())
-      d.pair_contacts.push_back(
-          {row.pair, row.side, row.nodes[0], Triangle{row.nodes[1], row.nodes[2], row.nodes[3]},
-           Vec3(-row.weights[1], -row.weights[2], -row.weights[3]), row.push, force * d.dt});
+    if (d.pair_contacts.size() == d.pair_contacts.capacity())
+      throw std::runtime_error("the implicit step records at most " +
+                               std::to_string(d.pair_contacts.capacity()) +
+                               " pressed contact rows; more press now: use 'integrator: verlet'");
+    d.pair_contacts.push_back(
+        {row.pair, row.side, row.nodes[0], Triangle{row.nodes[1], row.nodes[2], row.nodes[3]},
+         Vec3(-row.weights[1], -row.weights[2], -row.weights[3]), row.push, force * d.dt});
   }
 }
 

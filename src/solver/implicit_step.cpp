@@ -597,8 +597,10 @@ void project_positions(const Model& model, Data& d, double load_time) {
   Workspace& w = *d.work;
   apply_prescribed(model, d.x, load_time);
   apply_contacts(model, d.controls, d.x, load_time);
-  if (!model.contact_pairs.empty())
+  if (!model.contact_pairs.empty()) {
+    std::fill(w.pair_impulse.begin(), w.pair_impulse.end(), Vec3::Zero());
     apply_deformable_contacts(model, d.x, w, d.pair_contacts, d.dt, w.pair_impulse);
+  }
   project_volumes(model, d.controls, w, d.x, load_time, w.f_start);
   project_doubled(model, d.x);
 }
@@ -649,7 +651,11 @@ void backward_euler_step(const Model& model, Data& d, double h, double load_time
                          double tolerance, std::span<Vec3> acceleration) {
   Workspace& w = *d.work;
   ImplicitSystem& s = w.implicit;
-  if (!(s.h == h)) prepare(model, s, h);
+  if (!(s.h == h)) {
+    prepare(model, s, h);
+    // Room for a record of every pair row (a checkpoint's or a copy's may hold only its own).
+    d.pair_contacts.reserve(s.pair_rows.capacity());
+  }
   const int n = model.node_count();
   first_guess(model, d, h, load_time, acceleration, tolerance);
   s.iterations = 0;
