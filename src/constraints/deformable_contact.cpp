@@ -83,6 +83,18 @@ SurfacePoint nearest_surface_point(const ContactPair& pair, int other, TriangleH
   return found;
 }
 
+SurfaceReach prepare_surface(const ContactPair& pair, int other, std::span<const Vec3> x,
+                             TriangleHash& hash, std::vector<Vec3>& vertex_normal) {
+  hash.build(pair.faces[size_t(other)], x, pair.margin);
+  vertex_normals(pair.faces[size_t(other)], pair.nodes[size_t(other)], x, vertex_normal);
+  SurfaceReach r{x[size_t(pair.nodes[size_t(other)][0])], x[size_t(pair.nodes[size_t(other)][0])]};
+  for (int i : pair.nodes[size_t(other)])
+    r.lo = r.lo.cwiseMin(x[size_t(i)]), r.hi = r.hi.cwiseMax(x[size_t(i)]);
+  r.lo.array() -= pair.margin;
+  r.hi.array() += pair.margin;
+  return r;
+}
+
 namespace {
 
 // n . (W n) for a per-axis inverse mass W.
@@ -103,18 +115,9 @@ void apply_deformable_contacts(const Model& model, std::span<Vec3> x, Workspace&
       for (int side = 0; side < 2; ++side) {
         const int other = 1 - side;
         TriangleHash& hash = work.pair_hashes[k][size_t(other)];
-        hash.build(pair.faces[size_t(other)], x, pair.margin);
-        vertex_normals(pair.faces[size_t(other)], pair.nodes[size_t(other)], x, work.vertex_normal);
-        // Only nodes within reach of the other surface's box can be inside it: most are not.
-        Vec3 lo = x[size_t(pair.nodes[size_t(other)][0])], hi = lo;
-        for (int i : pair.nodes[size_t(other)])
-          lo = lo.cwiseMin(x[size_t(i)]), hi = hi.cwiseMax(x[size_t(i)]);
-        lo.array() -= pair.margin;
-        hi.array() += pair.margin;
+        const SurfaceReach reach = prepare_surface(pair, other, x, hash, work.vertex_normal);
         for (int p : pair.nodes[size_t(side)]) {
-          if ((x[size_t(p)].array() < lo.array()).any() ||
-              (x[size_t(p)].array() > hi.array()).any())
-            continue;
+          if (!reach.contains(x[size_t(p)])) continue;
           const SurfacePoint hit =
               nearest_surface_point(pair, other, hash, work.vertex_normal, x, x[p], pair.margin);
           if (hit.face < 0 || hit.depth >= 0.0) continue;

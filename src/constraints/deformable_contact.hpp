@@ -33,6 +33,17 @@ SurfacePoint nearest_surface_point(const ContactPair& pair, int other, TriangleH
                                    const std::vector<Vec3>& vertex_normal, std::span<const Vec3> x,
                                    const Vec3& p, double margin);
 
+// Side `other` of a pair at x made ready for nearest_surface_point (its hash and vertex
+// normals), and the box within its margin: only nodes in it can touch it, and most are not.
+struct SurfaceReach {
+  Vec3 lo, hi;
+  bool contains(const Vec3& p) const {
+    return (p.array() >= lo.array()).all() && (p.array() <= hi.array()).all();
+  }
+};
+SurfaceReach prepare_surface(const ContactPair& pair, int other, std::span<const Vec3> x,
+                             TriangleHash& hash, std::vector<Vec3>& vertex_normal);
+
 // Position stage: Gauss-Seidel sweeps over the surface nodes of every pair; a node inside the
 // other surface (signed distance along the interpolated vertex normal below zero) and its
 // closest triangle move apart along that normal, in proportion to their inverse masses, until

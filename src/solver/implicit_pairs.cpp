@@ -66,18 +66,10 @@ void find_side(const Model& model, Data& d, ImplicitSystem& s, int k, int side) 
   const int other = 1 - side;
   const std::vector<Vec3>& x = d.x;
   TriangleHash& hash = w.pair_hashes[size_t(k)][size_t(other)];
-  hash.build(pair.faces[size_t(other)], x, pair.margin);
-  vertex_normals(pair.faces[size_t(other)], pair.nodes[size_t(other)], x, w.vertex_normal);
-  // Only nodes within reach of the other surface's box can touch it: most do not.
-  Vec3 lo = x[size_t(pair.nodes[size_t(other)][0])], hi = lo;
-  for (int i : pair.nodes[size_t(other)])
-    lo = lo.cwiseMin(x[size_t(i)]), hi = hi.cwiseMax(x[size_t(i)]);
-  lo.array() -= pair.margin;
-  hi.array() += pair.margin;
+  const SurfaceReach reach = prepare_surface(pair, other, x, hash, w.vertex_normal);
   const ImplicitSystem::FaceRing& ring = s.face_rings[size_t(k)][size_t(other)];
   for (int p : pair.nodes[size_t(side)]) {
-    if ((x[size_t(p)].array() < lo.array()).any() || (x[size_t(p)].array() > hi.array()).any())
-      continue;
+    if (!reach.contains(x[size_t(p)])) continue;
     // A node both surfaces share (stitched) is on the other one by construction.
     if (ring.start[size_t(p)] < ring.start[size_t(p) + 1]) continue;
     const SurfacePoint hit =
