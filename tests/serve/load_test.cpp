@@ -3,6 +3,7 @@
 // keeps its speed, the server its memory.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <memory>
 
@@ -29,6 +30,15 @@ Speed measure(const ServerProcess& server, Client& probe, std::chrono::milliseco
   return {(t1 - t0) / seconds, (t1 - t0) / (cpu1 - cpu0), (cpu1 - cpu0) / seconds};
 }
 
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// Windows alone and with the 20 clients alternate, and their medians are compared: a drift of
+// the machine or of the run weighs on both sides, and one odd window on neither (in CI the
+// first window alone once ran at 1.85 against 2.25 and 2.28 in the later ones).
 TEST(ServeLoad, TwentyClientsForThirtySecondsLeaveTheSimulationsSpeedAndMemoryAlone) {
   ServerProcess server({scene_path("examples/prostate/50mL_rigid.yaml"), "--port", "0", "--threads",
                         "1", "--pace", "fast"});
@@ -36,46 +46,69 @@ TEST(ServeLoad, TwentyClientsForThirtySecondsLeaveTheSimulationsSpeedAndMemoryAl
   ASSERT_EQ(probe.connect(server.port()), "");
   std::this_thread::sleep_for(1s);
   ASSERT_GT(server.thread_cpu_seconds("phymul-sim"), 0.0);
-  const Speed before = measure(server, probe, 5s);
 
-  std::vector<std::unique_ptr<Client>> clients;
-  for (int k = 0; k < 20; ++k) {
-    clients.push_back(std::make_unique<Client>());
-    ASSERT_EQ(clients.back()->connect(server.port()), "");
+  constexpr int kCycles = 3;
+  std::vector<Speed> alone, loaded;
+  long memory_start = 0, memory_end = 0, fewest = -1;
+  for (int cycle = 0; cycle < kCycles; ++cycle) {
+    alone.push_back(measure(server, probe, 4s));
+    std::vector<std::unique_ptr<Client>> clients;
+    for (int k = 0; k < 20; ++k) {
+      clients.push_back(std::make_unique<Client>());
+      ASSERT_EQ(clients.back()->connect(server.port()), "");
+    }
+    std::this_thread::sleep_for(1s);  // connections and their buffers set up
+    if (cycle == 0) memory_start = server.rss_kib();
+    std::vector<long> frames0;
+    for (const auto& c : clients) frames0.push_back(c->frames());
+    loaded.push_back(measure(server, probe, 9s));
+    memory_end = server.rss_kib();
+    for (std::size_t k = 0; k < clients.size(); ++k) {
+      const long got = clients[k]->frames() - frames0[k];
+      fewest = fewest < 0 ? got : std::min(fewest, got);
+    }
   }
-  std::this_thread::sleep_for(3s);  // connections and their buffers set up
-  const long memory_start = server.rss_kib();
-  const Speed loaded = measure(server, probe, 27s);
-  const long memory_end = server.rss_kib();
-  long fewest = clients[0]->frames();
-  for (const auto& c : clients) fewest = std::min(fewest, c->frames());
-  clients.clear();
-  const Speed after = measure(server, probe, 5s);
+  alone.push_back(measure(server, probe, 4s));
 
-  const double alone = 0.5 * (before.real_time_factor + after.real_time_factor);
-  const double alone_cpu = 0.5 * (before.per_cpu_second + after.per_cpu_second);
+  const auto medians = [](const std::vector<Speed>& w, double Speed::*field) {
+    std::vector<double> v;
+    for (const Speed& s : w) v.push_back(s.*field);
+    return median(v);
+  };
+  const double rtf_alone = medians(alone, &Speed::real_time_factor);
+  const double rtf_loaded = medians(loaded, &Speed::real_time_factor);
+  const double cpu_alone = medians(alone, &Speed::per_cpu_second);
+  const double cpu_loaded = medians(loaded, &Speed::per_cpu_second);
+  double least_share = 1.0;
+  std::printf("windows (real-time factor, per CPU second, share of a core):\n");
+  for (std::size_t k = 0; k < alone.size(); ++k) {
+    for (const Speed* s : {&alone[k], k < loaded.size() ? &loaded[k] : nullptr}) {
+      if (!s) continue;
+      std::printf("  %-12s %.4f %.4f %.2f\n", s == &alone[k] ? "alone" : "20 clients",
+                  s->real_time_factor, s->per_cpu_second, s->core_share);
+      least_share = std::min(least_share, s->core_share);
+    }
+  }
   std::printf(
-      "real-time factor: %.4f alone (%.4f before, %.4f after), %.4f with 20 clients (%+.1f %%)\n"
-      "per CPU second of the simulation thread: %.4f alone, %.4f with 20 clients (%+.1f %%)\n"
-      "share of a core the simulation thread got: %.2f before, %.2f with clients, %.2f after\n"
-      "server memory %ld -> %ld KiB over 27 s; fewest frames a client got: %ld\n",
-      alone, before.real_time_factor, after.real_time_factor, loaded.real_time_factor,
-      100 * (loaded.real_time_factor / alone - 1), alone_cpu, loaded.per_cpu_second,
-      100 * (loaded.per_cpu_second / alone_cpu - 1), before.core_share, loaded.core_share,
-      after.core_share, memory_start, memory_end, fewest);
+      "medians: real-time factor %.4f alone, %.4f with 20 clients (%+.1f %%); per CPU second of "
+      "the simulation thread %.4f alone, %.4f with 20 clients (%+.1f %%)\n"
+      "server memory %ld -> %ld KiB over %d connections of 20 clients; fewest frames a client "
+      "got in 9 s: %ld\n",
+      rtf_alone, rtf_loaded, 100 * (rtf_loaded / rtf_alone - 1), cpu_alone, cpu_loaded,
+      100 * (cpu_loaded / cpu_alone - 1), memory_start, memory_end, kCycles, fewest);
   // The streaming costs the simulation's own thread nothing (no lock it waits on, no copy
   // beyond the snapshot's)...
-  EXPECT_LT(std::abs(loaded.per_cpu_second / alone_cpu - 1), 0.10);
+  EXPECT_LT(std::abs(cpu_loaded / cpu_alone - 1), 0.10);
   // ...and, when nothing else wants the machine's cores, no wall-clock time either. On a
   // machine shared with other work the clock measures that work instead: said, not checked.
-  if (std::min({before.core_share, loaded.core_share, after.core_share}) > 0.9)
-    EXPECT_LT(std::abs(loaded.real_time_factor / alone - 1), 0.10);
+  if (least_share > 0.9)
+    EXPECT_LT(std::abs(rtf_loaded / rtf_alone - 1), 0.10);
   else
     std::printf(
         "*** NOT CHECKED: the real-time factor's change, with the simulation thread "
         "getting under 90 %% of a core (other processes busy on this machine)\n");
   EXPECT_LT(memory_end - memory_start, 2048);  // KiB
-  EXPECT_GT(fewest, 27 * 20);                  // every client saw at least 20 frames a second
+  EXPECT_GT(fewest, 9 * 20);                   // every client saw at least 20 frames a second
 }
 
 // A client that stops reading (its thread stalled, a 4 KiB socket buffer) for 12 s while
