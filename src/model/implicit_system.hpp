@@ -107,6 +107,13 @@ struct ImplicitSystem {
   // Per node, the obstacle the step's last solve held it against (-1: none): it stays a
   // constraint, on the surface or not, until its multiplier releases it.
   std::vector<int> held_by;
+  // Anderson acceleration of the iterations (solver/implicit_anderson.cpp): the last few
+  // iterates and their images under one iteration, per node, in rings of `depth + 1`
+  // (empty: not used for this model); how many the rings hold, and the newest's slot.
+  struct Anderson {
+    int depth = 0, count = 0, newest = -1;
+    std::vector<Eigen::Vector3d> x, g, before;  // before: the iterate a solve starts from
+  } anderson;
   // The last step: global solves taken, and the largest residual nodal force (N) at its end.
   int iterations = 0;
   double residual_force = 0.0;

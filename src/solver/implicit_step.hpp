@@ -10,9 +10,10 @@ namespace phymul {
 // forces, every node's rotation fitted) and the global step (one solve with the matrix
 // factorised for h, kept in the workspace) until the largest residual nodal force is below
 // settings.implicit_tolerance or after settings.implicit_iterations solves; then v = (x -
-// x0) / h. Frictionless obstacles and contact pairs are rows of each solve, their forces in
-// Data::contact_force, Data::pair_contact_force and Data::pair_contacts. Throws
-// std::invalid_argument for what it does not support (finite elements, obstacles with
+// x0) / h; the iterations Anderson-accelerated where the model has no obstacle, contact pair
+// or rigid body (implicit_anderson.hpp). Frictionless obstacles and contact pairs are rows of each
+// solve, their forces in Data::contact_force, Data::pair_contact_force and Data::pair_contacts.
+// Throws std::invalid_argument for what it does not support (finite elements, obstacles with
 // friction, contact pairs with a rigid side). Allocates only when it factorises (the first
 // step, a new h).
 void step_implicit(const Model& model, Data& data, double h, double load_time);
