@@ -57,12 +57,11 @@ bool anderson_mix(ImplicitSystem& s, std::span<const Eigen::Vector3d> before,
   Small normal = Small::Zero(m, m);
   SmallVector rhs = SmallVector::Zero(m);
   for (size_t i = 0; i < n; ++i) {
-    Eigen::Vector3d df[kDepth];
-    const Eigen::Vector3d f0 = residual(a, slot(a, 0), n, i);
-    for (int j = 0; j < m; ++j)
-      df[j] = residual(a, slot(a, j), n, i) - residual(a, slot(a, j + 1), n, i);
+    Eigen::Vector3d f[kDepth + 1], df[kDepth];  // by age
+    for (int j = 0; j <= m; ++j) f[j] = residual(a, slot(a, j), n, i);
+    for (int j = 0; j < m; ++j) df[j] = f[j] - f[j + 1];
     for (int j = 0; j < m; ++j) {
-      rhs[j] += df[j].dot(f0);
+      rhs[j] += df[j].dot(f[0]);
       for (int l = 0; l <= j; ++l) normal(j, l) += df[j].dot(df[l]);
     }
   }

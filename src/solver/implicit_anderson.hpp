@@ -11,8 +11,9 @@
 namespace phymul {
 
 // Sizes the history for the model's iterations (allocates), or leaves it empty where the
-// acceleration does not apply: obstacles, contact pairs and rigid bodies change the set of
-// held rows or unknowns from one iteration to the next, which a mix across them ignores.
+// acceleration does not apply: contact pairs and rigid bodies change the rows or unknowns
+// from one iteration to the next in ways a mix across them would ignore (a change of the
+// obstacles' held nodes restarts the history instead: implicit_step.cpp).
 void prepare_anderson(const Model& model, ImplicitSystem& s);
 
 // Forgets the history: a new step, or an iteration that made the residual grow.
