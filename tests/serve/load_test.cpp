@@ -36,9 +36,25 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-// Windows alone and with the 20 clients alternate, and their medians are compared: a drift of
-// the machine or of the run weighs on both sides, and one odd window on neither (in CI the
-// first window alone once ran at 1.85 against 2.25 and 2.28 in the later ones).
+// Short windows alone and with the 20 clients alternate, and each loaded window is compared with
+// the mean of the windows alone on either side of it; the median of these ratios is asserted.
+// A shared VM's speed drifts by +-8 % over tens of seconds: three long windows each way, even
+// alternated, measured that drift (+10.5 % with the clients once in CI); a short window and
+// its two neighbours, 5 s apart, see nearly the same machine.
+struct Comparison {
+  double real_time_factor = 0.0, per_cpu_second = 0.0;  // median ratio loaded / alone
+};
+
+Comparison compare(const std::vector<Speed>& alone, const std::vector<Speed>& loaded) {
+  std::vector<double> rtf, cpu;
+  for (std::size_t k = 0; k < loaded.size(); ++k) {
+    const Speed &before = alone[k], &after = alone[k + 1], &with = loaded[k];
+    rtf.push_back(2 * with.real_time_factor / (before.real_time_factor + after.real_time_factor));
+    cpu.push_back(2 * with.per_cpu_second / (before.per_cpu_second + after.per_cpu_second));
+  }
+  return {median(rtf), median(cpu)};
+}
+
 TEST(ServeLoad, TwentyClientsForThirtySecondsLeaveTheSimulationsSpeedAndMemoryAlone) {
   ServerProcess server({scene_path("examples/prostate/50mL_rigid.yaml"), "--port", "0", "--threads",
                         "1", "--pace", "fast"});
@@ -47,38 +63,34 @@ TEST(ServeLoad, TwentyClientsForThirtySecondsLeaveTheSimulationsSpeedAndMemoryAl
   std::this_thread::sleep_for(1s);
   ASSERT_GT(server.thread_cpu_seconds("phymul-sim"), 0.0);
 
-  constexpr int kCycles = 3;
-  std::vector<Speed> alone, loaded;
+  // 12 cycles of 2.5 s with the clients (0.5 s to set up, 2 s measured): 30 s of 20 clients.
+  constexpr int kCycles = 12;
+  constexpr auto kWindow = 2s;
+  std::vector<Speed> alone{measure(server, probe, kWindow)}, loaded;
   long memory_start = 0, memory_end = 0, fewest = -1;
   for (int cycle = 0; cycle < kCycles; ++cycle) {
-    alone.push_back(measure(server, probe, 4s));
-    std::vector<std::unique_ptr<Client>> clients;
-    for (int k = 0; k < 20; ++k) {
-      clients.push_back(std::make_unique<Client>());
-      ASSERT_EQ(clients.back()->connect(server.port()), "");
-    }
-    std::this_thread::sleep_for(1s);  // connections and their buffers set up
-    if (cycle == 0) memory_start = server.rss_kib();
-    std::vector<long> frames0;
-    for (const auto& c : clients) frames0.push_back(c->frames());
-    loaded.push_back(measure(server, probe, 9s));
-    memory_end = server.rss_kib();
-    for (std::size_t k = 0; k < clients.size(); ++k) {
-      const long got = clients[k]->frames() - frames0[k];
-      fewest = fewest < 0 ? got : std::min(fewest, got);
-    }
+    {
+      std::vector<std::unique_ptr<Client>> clients;
+      for (int k = 0; k < 20; ++k) {
+        clients.push_back(std::make_unique<Client>());
+        ASSERT_EQ(clients.back()->connect(server.port()), "");
+      }
+      std::this_thread::sleep_for(500ms);  // connections and their buffers set up
+      if (cycle == 0) memory_start = server.rss_kib();
+      std::vector<long> frames0;
+      for (const auto& c : clients) frames0.push_back(c->frames());
+      loaded.push_back(measure(server, probe, kWindow));
+      memory_end = server.rss_kib();
+      for (std::size_t k = 0; k < clients.size(); ++k) {
+        const long got = clients[k]->frames() - frames0[k];
+        fewest = fewest < 0 ? got : std::min(fewest, got);
+      }
+    }  // the clients close
+    std::this_thread::sleep_for(500ms);
+    alone.push_back(measure(server, probe, kWindow));
   }
-  alone.push_back(measure(server, probe, 4s));
 
-  const auto medians = [](const std::vector<Speed>& w, double Speed::*field) {
-    std::vector<double> v;
-    for (const Speed& s : w) v.push_back(s.*field);
-    return median(v);
-  };
-  const double rtf_alone = medians(alone, &Speed::real_time_factor);
-  const double rtf_loaded = medians(loaded, &Speed::real_time_factor);
-  const double cpu_alone = medians(alone, &Speed::per_cpu_second);
-  const double cpu_loaded = medians(loaded, &Speed::per_cpu_second);
+  const Comparison change = compare(alone, loaded);
   double least_share = 1.0;
   std::printf("windows (real-time factor, per CPU second, share of a core):\n");
   for (std::size_t k = 0; k < alone.size(); ++k) {
@@ -90,25 +102,25 @@ TEST(ServeLoad, TwentyClientsForThirtySecondsLeaveTheSimulationsSpeedAndMemoryAl
     }
   }
   std::printf(
-      "medians: real-time factor %.4f alone, %.4f with 20 clients (%+.1f %%); per CPU second of "
-      "the simulation thread %.4f alone, %.4f with 20 clients (%+.1f %%)\n"
+      "median change with 20 clients against the windows alone around them: real-time factor "
+      "%+.1f %%, simulated time per CPU second of the simulation thread %+.1f %%\n"
       "server memory %ld -> %ld KiB over %d connections of 20 clients; fewest frames a client "
-      "got in 9 s: %ld\n",
-      rtf_alone, rtf_loaded, 100 * (rtf_loaded / rtf_alone - 1), cpu_alone, cpu_loaded,
-      100 * (cpu_loaded / cpu_alone - 1), memory_start, memory_end, kCycles, fewest);
+      "got in 2 s: %ld\n",
+      100 * (change.real_time_factor - 1), 100 * (change.per_cpu_second - 1), memory_start,
+      memory_end, kCycles, fewest);
   // The streaming costs the simulation's own thread nothing (no lock it waits on, no copy
   // beyond the snapshot's)...
-  EXPECT_LT(std::abs(cpu_loaded / cpu_alone - 1), 0.10);
+  EXPECT_LT(std::abs(change.per_cpu_second - 1), 0.10);
   // ...and, when nothing else wants the machine's cores, no wall-clock time either. On a
   // machine shared with other work the clock measures that work instead: said, not checked.
   if (least_share > 0.9)
-    EXPECT_LT(std::abs(rtf_loaded / rtf_alone - 1), 0.10);
+    EXPECT_LT(std::abs(change.real_time_factor - 1), 0.10);
   else
     std::printf(
         "*** NOT CHECKED: the real-time factor's change, with the simulation thread "
         "getting under 90 %% of a core (other processes busy on this machine)\n");
   EXPECT_LT(memory_end - memory_start, 2048);  // KiB
-  EXPECT_GT(fewest, 9 * 20);                   // every client saw at least 20 frames a second
+  EXPECT_GT(fewest, 2 * 20);                   // every client saw at least 20 frames a second
 }
 
 // A client that stops reading (its thread stalled, a 4 KiB socket buffer) for 12 s while
