@@ -25,7 +25,7 @@ struct Settings {
   prostate::Options study;
   std::vector<double> fillings_ml{50, 100, 200, 300, 400};
   std::string probe = "both", model = "lsm", neck, dt_estimate, support = "lateral",
-              static_solver = "relaxation";
+              static_solver = "relaxation", relaxation = "fire";
   double force = 0, lift_mm = 0, young_kpa = 0, mass_scaling_us = -1, stitch_radius_mm = 0;
   int bladder_subdivisions = 0;
   std::string output = "results/prostate", json_file, scenes;
@@ -90,6 +90,7 @@ int run(Settings& s) {
   if (s.mass_scaling_us >= 0) o.mass_scaling_dt = s.mass_scaling_us * 1e-6;
   if (const auto estimate = scene_value<DtEstimate>(s.dt_estimate)) o.dt_estimate = *estimate;
   o.static_solver = *scene_value<StaticSolver>(s.static_solver);
+  o.relaxation = *scene_value<Relaxation>(s.relaxation);
   try {
     if (!s.scenes.empty()) {  // the study's scenes, in dynamics, for `phymul run`
       std::filesystem::create_directories(s.scenes);
@@ -220,9 +221,14 @@ Command add_prostate_command(CLI::App& parent) {
       ->check(CLI::Range(2, 40))
       ->capture_default_str();
   app->add_option("--static-solver", s.static_solver,
-                  "equilibria by kinetic relaxation or by the implicit static solver "
+                  "equilibria by relaxation (--relaxation) or by the implicit static solver "
                   "(simulation.solver)")
       ->check(CLI::IsMember({"relaxation", "implicit"}))
+      ->capture_default_str();
+  app->add_option("--relaxation", s.relaxation,
+                  "--static-solver relaxation: FIRE, or kinetic damping (restarts at energy "
+                  "peaks; simulation.relaxation)")
+      ->check(CLI::IsMember({"fire", "kinetic"}))
       ->capture_default_str();
   app->add_option("--tolerance", o.tolerance, "equilibrium: largest residual nodal force (N)")
       ->check(CLI::Range(1e-12, 1e-2))

@@ -433,6 +433,7 @@ _PROSTATE_PARAMETERS = {
     "support_stiffness": ("--support-stiffness", "stiffness", 1.0, (1e-3, 1e6)),
     "stitch_radius": ("--stitch-radius", "length", 1e3, (1e-3, 0.02)),
     "static_solver": ("--static-solver", "choice", ("relaxation", "implicit"), None),
+    "relaxation": ("--relaxation", "choice", ("fire", "kinetic"), None),
 }
 _PROSTATE_DEFAULTS = {"filling": 50e-6, "probe": "pressure"}
 _PROSTATE_FIGURES = ("prostate_deformation_pct", "centre_displacement_mm", "centre_lift_mm",

@@ -55,10 +55,11 @@ std::string json(const Study& study) {
   }
   j += fmt::format(
       "\n  ],\n  \"support\": \"{}\",\n  \"static_solver\": \"{}\",\n"
-      "  \"prostate_stiffness_n_per_m\": {:.17g},\n"
+      "  \"relaxation\": \"{}\",\n  \"prostate_stiffness_n_per_m\": {:.17g},\n"
       "  \"bladder_stiffness_n_per_m\": {:.17g},\n  \"wall_time_s\": {:.6g}",
       support_name(study.options.support), scene_word(study.options.static_solver),
-      study.options.prostate_stiffness, study.options.bladder_stiffness, study.wall_time);
+      scene_word(study.options.relaxation), study.options.prostate_stiffness,
+      study.options.bladder_stiffness, study.wall_time);
   if (!study.real_time.empty()) {
     j += ",\n  \"real_time\": [";
     for (size_t k = 0; k < study.real_time.size(); ++k) {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "phymul/scene_words.hpp"
 #include "phymul/studies/prostate.hpp"
 
 namespace phymul::prostate {
@@ -109,7 +110,7 @@ std::string scene_text(const Options& o, const SceneSettings& s) {
     t += fmt::format("  mode: static\n  tolerance: {:.17g} N\n  load_steps: {}\n  relaxation: {}\n",
                      s.probe == Probe::rigid || o.support == Support::bladder ? o.contact_tolerance
                                                                               : o.tolerance,
-                     s.load_steps, "kinetic");
+                     s.load_steps, scene_word(o.relaxation));
   // Each implicit static step is a solve to the tolerance; where an equilibrium is near, a
   // handful find it (5 to 8 on the paper configuration), so a hundred mean there is none.
   if (!s.dynamic && o.static_solver == StaticSolver::implicit)

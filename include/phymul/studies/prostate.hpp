@@ -73,6 +73,10 @@ struct Options {
   // Static equilibria by kinetic relaxation, or by the implicit static solver (which takes
   // no obstacle yet: the pressure probe, Support::lateral).
   StaticSolver static_solver = StaticSolver::relaxation;
+  // How the relaxation takes energy out: FIRE turns the motion downhill, where kinetic
+  // damping only restarts at energy peaks and crawls along the hanging organs' soft modes
+  // (docs/validation.md, "The paper's configuration").
+  Relaxation relaxation = Relaxation::fire;
   // N, the same with the rigid probe, whose contact slows the relaxation's last digits
   // (README "The prostate study"); at K = 640 N/m 0.1 mN moves a node by about 0.16 um.
   double contact_tolerance = 1e-4;
