@@ -261,7 +261,7 @@ Simulator dynamic_simulator(const Options& o, double filling, Probe probe, doubl
 
 // With the rigid probe the implicit static solver holds the prostate on the probe's surface
 // (the contact nodes' normals are constraints of its solve): it converges to 1e-10 N, where
-// the kinetic relaxation stalls near 1e-5 N, and the probe's force from the balance of the
+// the relaxations stall short of 1e-6 N, and the probe's force from the balance of the
 // weights and the holds equals the contact's reaction. The explicit dynamic run, held until
 // it rests, comes to the same place.
 TEST(ProstateDynamics, TheRigidProbesImplicitEquilibriumBalancesAndIsWhereTheRunRests) {
