@@ -111,8 +111,8 @@ TEST(ProstateStudy, InThePapersConfigurationEveryFillingAndProbeReachesABalanced
       EXPECT_EQ(r.hold_force, 0.0);  // nothing holds the prostate but the bladder
       // The probe's force from the balance of the weights and the top node's reaction,
       // against the force the probe itself applied. They differ by the residual forces left,
-      // at most the tolerance on each node: hanging from one node, this configuration relaxes
-      // to about 3e-5 N and no further (docs/validation.md), so the study stops at 1e-4 N.
+      // at most the tolerance on each node: hanging from one node, this configuration stalls
+      // near 1e-5 N (docs/validation.md), so the study stops at 1e-4 N.
       const double applied =
           probe == Probe::pressure ? r.pressure_resultant : r.probe_contact_force;
       EXPECT_GT(applied, 0.1);
