@@ -32,13 +32,21 @@ def variation(row):
     return "baseline"
 
 
+def solved(row):
+    """How the row's equilibria were found, where a case sets it apart from the sweep's own."""
+    if row.get("static_solver") == "relaxation":
+        tolerance = row.get("contact_tolerance", "")
+        return f" (FIRE, {float(tolerance):.0e} N)".replace("e-0", "e-") if tolerance else " (FIRE)"
+    return ""
+
+
 def main(results, out):
     with open(results, newline="") as f:
         rows = [r for r in csv.DictReader(f)]
     failed = [r for r in rows if r["status"] != "ok"]
     by = {}
     for r in rows:
-        by.setdefault(variation(r), {})[round(float(r["filling"]) * 1e6)] = r
+        by.setdefault(variation(r) + solved(r), {})[round(float(r["filling"]) * 1e6)] = r
     names = ["baseline"] + sorted(n for n in by if n != "baseline")
     print("| variation | 50 mL | 400 mL | ratio (paper ~2) | probe force 50 / 400 mL | "
           "stitched nodes |")

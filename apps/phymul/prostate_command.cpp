@@ -233,6 +233,11 @@ Command add_prostate_command(CLI::App& parent) {
   app->add_option("--tolerance", o.tolerance, "equilibrium: largest residual nodal force (N)")
       ->check(CLI::Range(1e-12, 1e-2))
       ->capture_default_str();
+  app->add_option("--contact-tolerance", o.contact_tolerance,
+                  "equilibrium with the rigid probe or --support bladder: largest residual "
+                  "nodal force (N)")
+      ->check(CLI::Range(1e-12, 1e-2))
+      ->capture_default_str();
   app->add_option("-o,--output", s.output, "output directory")->capture_default_str();
   app->add_option("--json", s.json_file, "also write the results as JSON to this file");
   app->add_option("--scenes", s.scenes,

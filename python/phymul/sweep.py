@@ -434,6 +434,7 @@ _PROSTATE_PARAMETERS = {
     "stitch_radius": ("--stitch-radius", "length", 1e3, (1e-3, 0.02)),
     "static_solver": ("--static-solver", "choice", ("relaxation", "implicit"), None),
     "relaxation": ("--relaxation", "choice", ("fire", "kinetic"), None),
+    "contact_tolerance": ("--contact-tolerance", "force", 1.0, (1e-12, 1e-2)),
 }
 _PROSTATE_DEFAULTS = {"filling": 50e-6, "probe": "pressure"}
 _PROSTATE_FIGURES = ("prostate_deformation_pct", "centre_displacement_mm", "centre_lift_mm",
