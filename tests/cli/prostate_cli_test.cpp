@@ -85,6 +85,31 @@ TEST(ProstateCli, TheImplicitStaticSolverFindsTheSameDeformation) {
   EXPECT_NEAR(implicit, relaxed, 1e-5 * relaxed);
 }
 
+// --relaxation: FIRE (the default) and kinetic damping relax to the same equilibrium, said in
+// the JSON and in the scene the run writes.
+TEST(ProstateCli, FireAndKineticDampingFindTheSameDeformation) {
+  TempDir dir;
+  auto deformation = [&](const std::string& relaxation) {
+    const auto json = dir.path() / (relaxation + ".json");
+    const auto r = run_command(fmt::format(
+        "OMP_NUM_THREADS=1 '{}' prostate --fillings 50 --probe pressure --relaxation {} "
+        "--tolerance 1e-8 --no-pictures --no-real-time -q -o '{}' --json '{}'",
+        cli(), relaxation, (dir.path() / relaxation).string(), json.string()));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    const std::string text = read_text(json);
+    EXPECT_NE(text.find(fmt::format("\"relaxation\": \"{}\"", relaxation)), std::string::npos)
+        << text;
+    const std::string scene = read_text(dir.path() / relaxation / "50mL_pressure.yaml");
+    EXPECT_NE(scene.find("relaxation: " + relaxation), std::string::npos) << scene;
+    const std::string key = "\"prostate_deformation_pct\": ";
+    const size_t at = text.find(key);
+    return at == std::string::npos ? 0.0 : std::stod(text.substr(at + key.size()));
+  };
+  const double fire = deformation("fire"), kinetic = deformation("kinetic");
+  EXPECT_GT(fire, 1.0);  // per cent
+  EXPECT_NEAR(kinetic, fire, 1e-5 * fire);
+}
+
 // The paper's configuration by the implicit static solver, which takes the organs' contact
 // pair: the prostate on 11.5 N/m side springs (docs/validation.md) finds both fillings'
 // equilibria, the empty bladder's deformation the larger; hanging from a single stitched node
