@@ -34,10 +34,11 @@ def variation(row):
 
 def solved(row):
     """How the row's equilibria were found, where a case sets it apart from the sweep's own."""
-    if row.get("static_solver") == "relaxation":
-        tolerance = row.get("contact_tolerance", "")
-        return f" (FIRE, {float(tolerance):.0e} N)".replace("e-0", "e-") if tolerance else " (FIRE)"
-    return ""
+    if row.get("static_solver") != "relaxation":
+        return ""
+    how = "kinetic damping" if row.get("relaxation") == "kinetic" else "FIRE"
+    tolerance = row.get("contact_tolerance", "")
+    return f" ({how}, {float(tolerance):.0e} N)".replace("e-0", "e-") if tolerance else f" ({how})"
 
 
 def main(results, out):

@@ -63,24 +63,37 @@ TEST(ProstateCli, RigidRunsWriteTheProbeBesideEachFrame) {
   }
 }
 
+// The 50 mL pressure-probe study relaxed to 1e-8 N with `--OPTION VALUE`, in DIR/VALUE/: its
+// JSON (which must say "JSON_KEY": "VALUE") and its deformation (per cent).
+struct StudyRun {
+  std::string json;
+  double deformation = 0.0;
+};
+
+StudyRun run_study_with(const TempDir& dir, const std::string& option, const std::string& value,
+                        const std::string& json_key) {
+  const auto json = dir.path() / (value + ".json");
+  const auto r = run_command(
+      fmt::format("OMP_NUM_THREADS=1 '{}' prostate --fillings 50 --probe pressure --{} {} "
+                  "--tolerance 1e-8 --no-pictures --no-real-time -q -o '{}' --json '{}'",
+                  cli(), option, value, (dir.path() / value).string(), json.string()));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  StudyRun run{read_text(json)};
+  EXPECT_NE(run.json.find(fmt::format("\"{}\": \"{}\"", json_key, value)), std::string::npos)
+      << run.json;
+  const std::string key = "\"prostate_deformation_pct\": ";
+  const size_t at = run.json.find(key);
+  if (at != std::string::npos) run.deformation = std::stod(run.json.substr(at + key.size()));
+  return run;
+}
+
 // --static-solver implicit: the same equilibria by the implicit static solver, said in the JSON.
 TEST(ProstateCli, TheImplicitStaticSolverFindsTheSameDeformation) {
   TempDir dir;
-  auto deformation = [&](const std::string& solver) {
-    const auto json = dir.path() / (solver + ".json");
-    const auto r = run_command(fmt::format(
-        "OMP_NUM_THREADS=1 '{}' prostate --fillings 50 --probe pressure --static-solver {} "
-        "--tolerance 1e-8 --no-pictures --no-real-time -q -o '{}' --json '{}'",
-        cli(), solver, (dir.path() / solver).string(), json.string()));
-    EXPECT_EQ(r.exit_code, 0) << r.output;
-    const std::string text = read_text(json);
-    EXPECT_NE(text.find(fmt::format("\"static_solver\": \"{}\"", solver)), std::string::npos)
-        << text;
-    const std::string key = "\"prostate_deformation_pct\": ";
-    const size_t at = text.find(key);
-    return at == std::string::npos ? 0.0 : std::stod(text.substr(at + key.size()));
-  };
-  const double relaxed = deformation("relaxation"), implicit = deformation("implicit");
+  const double relaxed =
+      run_study_with(dir, "static-solver", "relaxation", "static_solver").deformation;
+  const double implicit =
+      run_study_with(dir, "static-solver", "implicit", "static_solver").deformation;
   EXPECT_GT(relaxed, 1.0);  // per cent
   EXPECT_NEAR(implicit, relaxed, 1e-5 * relaxed);
 }
@@ -89,25 +102,15 @@ TEST(ProstateCli, TheImplicitStaticSolverFindsTheSameDeformation) {
 // the JSON and in the scene the run writes.
 TEST(ProstateCli, FireAndKineticDampingFindTheSameDeformation) {
   TempDir dir;
-  auto deformation = [&](const std::string& relaxation) {
-    const auto json = dir.path() / (relaxation + ".json");
-    const auto r = run_command(fmt::format(
-        "OMP_NUM_THREADS=1 '{}' prostate --fillings 50 --probe pressure --relaxation {} "
-        "--tolerance 1e-8 --no-pictures --no-real-time -q -o '{}' --json '{}'",
-        cli(), relaxation, (dir.path() / relaxation).string(), json.string()));
-    EXPECT_EQ(r.exit_code, 0) << r.output;
-    const std::string text = read_text(json);
-    EXPECT_NE(text.find(fmt::format("\"relaxation\": \"{}\"", relaxation)), std::string::npos)
-        << text;
-    const std::string scene = read_text(dir.path() / relaxation / "50mL_pressure.yaml");
-    EXPECT_NE(scene.find("relaxation: " + relaxation), std::string::npos) << scene;
-    const std::string key = "\"prostate_deformation_pct\": ";
-    const size_t at = text.find(key);
-    return at == std::string::npos ? 0.0 : std::stod(text.substr(at + key.size()));
-  };
-  const double fire = deformation("fire"), kinetic = deformation("kinetic");
-  EXPECT_GT(fire, 1.0);  // per cent
-  EXPECT_NEAR(kinetic, fire, 1e-5 * fire);
+  double deformation[2] = {};
+  const std::string relaxations[2] = {"fire", "kinetic"};
+  for (int k = 0; k < 2; ++k) {
+    deformation[k] = run_study_with(dir, "relaxation", relaxations[k], "relaxation").deformation;
+    const std::string scene = read_text(dir.path() / relaxations[k] / "50mL_pressure.yaml");
+    EXPECT_NE(scene.find("relaxation: " + relaxations[k]), std::string::npos) << scene;
+  }
+  EXPECT_GT(deformation[0], 1.0);  // per cent
+  EXPECT_NEAR(deformation[1], deformation[0], 1e-5 * deformation[0]);
 }
 
 // The paper's configuration by the implicit static solver, which takes the organs' contact

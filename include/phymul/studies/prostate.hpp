@@ -70,8 +70,7 @@ struct Options {
   // s, dynamic scenes: mass scaling lifts the light nodes' stability limit to this (0: none).
   double mass_scaling_dt = 0.0;
   double tolerance = 1e-6;  // N, static equilibrium: largest residual nodal force
-  // Static equilibria by kinetic relaxation, or by the implicit static solver (which takes
-  // no obstacle yet: the pressure probe, Support::lateral).
+  // Static equilibria by relaxation (below), or by the implicit static solver.
   StaticSolver static_solver = StaticSolver::relaxation;
   // How the relaxation takes energy out: FIRE turns the motion downhill, where kinetic
   // damping only restarts at energy peaks and crawls along the hanging organs' soft modes
