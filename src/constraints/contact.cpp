@@ -145,8 +145,9 @@ void apply_contacts(const Model& model, const Controls& controls, std::span<Vec3
   }
 }
 
-void apply_contacts(const Model& model, const Controls& controls, std::span<Vec3> x,
-                    double load_time, ContactStep& step) {
+double apply_contacts(const Model& model, const Controls& controls, std::span<Vec3> x,
+                      double load_time, ContactStep& step) {
+  double largest = 0.0;
   for (size_t k = 0; k < model.obstacles.size(); ++k) {
     const RigidObstacle& o = model.obstacles[k];
     const Schedule& motion = controls.obstacle_motion[k];
@@ -161,19 +162,23 @@ void apply_contacts(const Model& model, const Controls& controls, std::span<Vec3
         apply_friction(o, free, x[i], step.x_start[i], shift, (x[i] - before).norm(), base);
       step.touching[i] = int(k);
       step.impulse[k] += model.mass[i] * (x[i] - before) / step.dt;
+      largest = std::max(largest, (x[i] - before).norm());
     };
     if (o.nodes.empty())
       for (int i = 0; i < model.node_count(); ++i) one(i);
     else
       for (int i : o.nodes) one(i);
   }
+  return largest;
 }
 
-void apply_contact_velocities(const Model& model, const Controls& controls, std::span<const Vec3> x,
-                              std::span<Vec3> v, double load_time, ContactStep& step) {
+double apply_contact_velocities(const Model& model, const Controls& controls,
+                                std::span<const Vec3> x, std::span<Vec3> v, double load_time,
+                                ContactStep& step) {
+  double largest = 0.0;
   if (!model.contact_pairs.empty() && step.pair_contacts)
-    apply_deformable_contact_velocities(model, v, *step.pair_contacts, step.pair_impulse);
-  if (model.obstacles.empty()) return;
+    largest = apply_deformable_contact_velocities(model, v, *step.pair_contacts, step.pair_impulse);
+  if (model.obstacles.empty()) return largest;
   int placed = -1;  // the obstacle whose base and velocity are below
   Vec3 base = Vec3::Zero(), shape_velocity = Vec3::Zero();
   for (int i = 0; i < model.node_count(); ++i) {
@@ -198,7 +203,9 @@ void apply_contact_velocities(const Model& model, const Controls& controls, std:
     dv = dv.cwiseProduct(free_axes_of(model.inverse_mass[i]));
     v[i] += dv;
     step.impulse[size_t(k)] += model.mass[i] * dv;
+    largest = std::max(largest, dv.norm());
   }
+  return largest;
 }
 
 }  // namespace phymul

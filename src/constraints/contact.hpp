@@ -45,14 +45,16 @@ struct ContactStep {
 // Position stage with Coulomb friction: projects like apply_contacts, then cancels the
 // node's tangential displacement relative to the moving shape while it is within
 // friction * (normal correction), else shortens it by that much. Records which nodes each
-// obstacle moved and the momentum m dx / dt it gave them.
-void apply_contacts(const Model& model, const Controls& controls, std::span<Vec3> x,
-                    double load_time, ContactStep& step);
+// obstacle moved and the momentum m dx / dt it gave them. Returns the largest move (m).
+double apply_contacts(const Model& model, const Controls& controls, std::span<Vec3> x,
+                      double load_time, ContactStep& step);
 
 // Velocity stage (RATTLE-like) for the nodes the position stage moved: removes their
 // velocity into the shape relative to its own motion, and applies Coulomb friction to the
-// tangential part with the normal impulse as bound. Adds m dv to step.impulse.
-void apply_contact_velocities(const Model& model, const Controls& controls, std::span<const Vec3> x,
-                              std::span<Vec3> v, double load_time, ContactStep& step);
+// tangential part with the normal impulse as bound. Adds m dv to step.impulse. Returns the
+// largest velocity change it made (m/s), for the stages that alternate with it.
+double apply_contact_velocities(const Model& model, const Controls& controls,
+                                std::span<const Vec3> x, std::span<Vec3> v, double load_time,
+                                ContactStep& step);
 
 }  // namespace phymul

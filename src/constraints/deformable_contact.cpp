@@ -147,9 +147,10 @@ void apply_deformable_contacts(const Model& model, std::span<Vec3> x, Workspace&
   }
 }
 
-void apply_deformable_contact_velocities(const Model& model, std::span<Vec3> v,
-                                         std::span<PairContact> contacts,
-                                         std::span<Vec3> pair_impulse) {
+double apply_deformable_contact_velocities(const Model& model, std::span<Vec3> v,
+                                           std::span<PairContact> contacts,
+                                           std::span<Vec3> pair_impulse) {
+  double largest = 0.0;
   for (PairContact& c : contacts) {
     const Vec3& n = c.normal;
     const Vec3& b = c.weights;
@@ -169,7 +170,9 @@ void apply_deformable_contact_velocities(const Model& model, std::span<Vec3> v,
           lambda * b[j] * model.inverse_mass[size_t(c.triangle[j])].cwiseProduct(n);
     pair_impulse[size_t(c.pair)] += (c.side == 0 ? lambda : -lambda) * n;
     c.impulse += lambda;
+    largest = std::max(largest, -approach);
   }
+  return largest;
 }
 
 void add_deformable_contact_forces(std::span<const PairContact> contacts, double dt,
