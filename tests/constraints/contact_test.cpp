@@ -6,9 +6,11 @@
 #include <random>
 #include <vector>
 
+#include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
 #include "support/kernels.hpp"
 #include "support/models.hpp"
+#include "support/process.hpp"
 
 namespace phymul {
 namespace {
@@ -258,7 +260,34 @@ TEST(Contact, KeptVolumeOnAPlaneRelaxesToRestOnItsWeight) {
       relaxed.residual, relaxed.iterations, contact.z(), weight, sim.kinetic_energy());
   ASSERT_TRUE(relaxed.converged);
   EXPECT_NEAR(contact.z(), weight, 1e-6 * weight);
-  for (const Vec3& x : sim.data().x) EXPECT_GE(x.z(), -1e-15);
+  // The position stage stops once the obstacle moves no node by more than a nanometre: the
+  // last volume projection leaves them less than that inside (0.16 nm here).
+  double deepest = 0.0;
+  for (const Vec3& x : sim.data().x) deepest = std::min(deepest, x.z());
+  std::printf("deepest node %.3g m inside the floor\n", -deepest);
+  EXPECT_GT(deepest, -1e-9);
+}
+
+// The bladder example (a kept volume filled from 113 to 300 mL, landing on a floor) at every
+// step from 0.26 to 0.56 of the stable one: with 10 1/s of damping a few of these steps ran
+// away (the landing, or the full bladder), with or without the contact and volume rounds.
+TEST(Contact, TheFillingBladderOnItsFloorIsStableAtEveryStepSize) {
+  Scene scene = load_scene(testing::source_dir() / "examples" / "bladder_filling.yaml");
+  for (double safety = 0.26; safety < 0.565; safety += 0.015) {
+    scene.simulation.dt_safety = safety;
+    Simulator sim(compile_scene(scene));
+    double lowest = 1.0;
+    try {
+      while (sim.data().time < scene.simulation.duration) {
+        sim.step();
+        for (const Vec3& x : sim.data().x) lowest = std::min(lowest, x.z());
+      }
+    } catch (const InstabilityError& e) {
+      ADD_FAILURE() << "dt_safety " << safety << ": " << e.what();
+    }
+    EXPECT_GT(lowest, -0.032 - 1e-9) << "dt_safety " << safety;  // on the floor, not in it
+    EXPECT_GT(sim.data().contact_force.at(0).z(), 0.0) << "dt_safety " << safety;
+  }
 }
 
 // 4 x 4 x 2 cm block, 5 mm cells, fixed on its face `fixed`.

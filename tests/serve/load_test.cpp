@@ -127,6 +127,9 @@ TEST(ServeLoad, TwentyClientsForThirtySecondsLeaveTheSimulationsSpeedAndMemoryAl
 // another watches: the simulation keeps its pace, the other client its frame rate, the
 // server its memory, and the stalled client, once it reads again, gets the latest frames,
 // not all the ones it missed (the server keeps a few frames' worth in the kernel for it).
+// The stall's window is compared with the mean of windows before and after it, in simulated
+// time per CPU second of the simulation thread (what the server could take from it) and per
+// wall-clock second where that thread has its core (a VM's speed drifts; see above).
 TEST(ServeLoad, AStalledClientSlowsNothingAndGetsTheLatestFramesAfter) {
   ServerProcess server(
       {scene_path("examples/prostate/50mL_rigid.yaml"), "--port", "0", "--threads", "1"});
@@ -136,28 +139,38 @@ TEST(ServeLoad, AStalledClientSlowsNothingAndGetsTheLatestFramesAfter) {
   ASSERT_EQ(watching.connect(server.port()), "");
   std::this_thread::sleep_for(1s);
   // The pace before (real time, or what a sanitized build manages).
-  const double p0 = watching.state()["time"];
-  std::this_thread::sleep_for(3s);
-  const double pace_before = (watching.state()["time"].get<double>() - p0) / 3.0;
+  const Speed before = measure(server, watching, 3s);
   const long memory_before = server.rss_kib();
   const long frames_before = watching.frames();
-  const double t0 = watching.state()["time"];
   stalled.stall_at_next_frame(12s);
   const auto start = std::chrono::steady_clock::now();
-  std::this_thread::sleep_for(11s);
+  const Speed during = measure(server, watching, 11s);
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const double simulated = watching.state()["time"].get<double>() - t0;
   const double rate = double(watching.frames() - frames_before) / wall;
   const long memory_during = server.rss_kib();
   // The stall over, it reads what the kernel's buffers held (about 4 MiB) and then the latest.
-  std::this_thread::sleep_for(3s);
+  std::this_thread::sleep_for(1500ms);
+  const Speed after = measure(server, watching, 1500ms);
+  const double cpu_change =
+                   2 * during.per_cpu_second / (before.per_cpu_second + after.per_cpu_second),
+               pace_change =
+                   2 * during.real_time_factor / (before.real_time_factor + after.real_time_factor);
   std::printf(
-      "pace %.3f before, %.3f during the stall; the watching client got %.1f frames a second; "
-      "frames: stalled %ld, watching %ld; server memory %ld -> %ld KiB\n",
-      pace_before, simulated / wall, rate, stalled.frames(), watching.frames(), memory_before,
-      memory_during);
-  EXPECT_NEAR(simulated / wall / pace_before, 1.0, 0.15);
+      "pace (real-time factor, per CPU second, share of a core): before %.3f %.3f %.2f, during "
+      "the stall %.3f %.3f %.2f, after %.3f %.3f %.2f; the watching client got %.1f frames a "
+      "second; frames: stalled %ld, watching %ld; server memory %ld -> %ld KiB\n",
+      before.real_time_factor, before.per_cpu_second, before.core_share, during.real_time_factor,
+      during.per_cpu_second, during.core_share, after.real_time_factor, after.per_cpu_second,
+      after.core_share, rate, stalled.frames(), watching.frames(), memory_before, memory_during);
+  EXPECT_NEAR(cpu_change, 1.0, 0.15);
+  // Paced to real time, or flat out with its core: the clock measures the server.
+  if (before.real_time_factor > 0.95 || during.core_share > 0.9)
+    EXPECT_NEAR(pace_change, 1.0, 0.15);
+  else
+    std::printf(
+        "*** NOT CHECKED: the real-time factor's change, with the simulation thread "
+        "getting under 90 %% of a core (other processes busy on this machine)\n");
   EXPECT_GT(rate, 30.0);
   EXPECT_LT(memory_during - memory_before, 2048);
   EXPECT_LT(stalled.frames(), 0.8 * watching.frames());
