@@ -36,20 +36,14 @@ void apply_position_constraints(const Model& model, const Controls& controls, Wo
                               contact.pair_impulse);
   if (!model.needles.empty()) apply_needles(model, controls, x, load_time, contact);
   project_volumes(model, controls, work, x, load_time, scratch, contact.x_start);
-  // A node on an obstacle and on a kept volume's surface: the volume's projection moves it
-  // back into the obstacle (0.2 um on the prostate, 20 um on a filling bladder). The two
-  // alternate until the obstacles move no node by more than a nanometre, each round about
-  // fifty times smaller: the 1e-15 m of round-off took twice the rounds (+50 % on a step).
-  constexpr double kSettled = 1e-9;  // m
-  constexpr int kMostRounds = 20;
-  if (!model.obstacles.empty() && !model.volumes.empty()) {
-    for (int round = 0; round < kMostRounds; ++round) {
-      const double moved = apply_contacts(model, controls, x, load_time, contact);
-      if (moved == 0.0) break;
-      project_volumes(model, controls, work, x, load_time, scratch, contact.x_start);
-      if (moved <= kSettled) break;
-    }
-  }
+  // The volume's projection moves a node on an obstacle back into it (0.2 um on the prostate,
+  // 20 um on a filling bladder): rounds until the obstacles move none above 1 nm (the
+  // 1e-15 m of round-off took twice the rounds, +50 % on a step).
+  if (!model.obstacles.empty() && !model.volumes.empty())
+    alternate_contact_and_volume(
+        [&] { return apply_contacts(model, controls, x, load_time, contact); },
+        [&] { project_volumes(model, controls, work, x, load_time, scratch, contact.x_start); },
+        1e-9 /* m */);
   project_doubled(model, x);
 }
 

@@ -328,24 +328,19 @@ void accelerations(const Model& model, Data& d, std::vector<Vec3>& a,
 
 namespace {
 
-// A node on an obstacle and on a kept volume's surface: the volume's velocity correction
-// pushes it back into the obstacle, and the contact's takes the volume off its rate. The two
-// alternate until the contact stage changes no velocity above round-off (each round shrinks
-// it about a hundredfold); without this the node never comes to rest there.
+// The contact's and the volumes' velocity stages, alternated until the contact changes no
+// velocity above round-off: without the rounds a node on both never comes to rest there.
 void constrain_velocities(const Model& model, Data& d, double load_time, ContactStep& contact,
                           std::span<Vec3> grad) {
-  constexpr double kSettled = 1e-12;  // m/s
-  constexpr int kMostRounds = 20;
   Workspace& work = *d.work;
-  apply_contact_velocities(model, d.controls, d.x, d.v, load_time, contact);
-  project_volume_velocities(model, work, d.x, d.v, grad);
+  auto contact_stage = [&] {
+    return apply_contact_velocities(model, d.controls, d.x, d.v, load_time, contact);
+  };
+  auto volume_stage = [&] { project_volume_velocities(model, work, d.x, d.v, grad); };
+  contact_stage();
+  volume_stage();
   if (model.volumes.empty() || (model.obstacles.empty() && model.contact_pairs.empty())) return;
-  for (int round = 0; round < kMostRounds; ++round) {
-    const double moved = apply_contact_velocities(model, d.controls, d.x, d.v, load_time, contact);
-    if (moved == 0.0) return;
-    project_volume_velocities(model, work, d.x, d.v, grad);
-    if (moved <= kSettled) return;
-  }
+  alternate_contact_and_volume(contact_stage, volume_stage, 1e-12 /* m/s */);
 }
 
 }  // namespace
