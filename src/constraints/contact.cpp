@@ -208,4 +208,49 @@ double apply_contact_velocities(const Model& model, const Controls& controls,
   return largest;
 }
 
+bool on_obstacles(const Model& model, const Controls& controls, std::span<const Vec3> x,
+                  double load_time, const ContactStep& step, std::vector<ObstacleContact>& held) {
+  constexpr double kOn = 1e-12;  // m: the projection's surface, within round-off
+  held.clear();
+  int placed = -1;
+  Vec3 base = Vec3::Zero();
+  for (int i = 0; i < model.node_count(); ++i) {
+    const int k = step.touching[i];
+    if (k < 0) continue;
+    const RigidObstacle& o = model.obstacles[size_t(k)];
+    if (o.friction > 0.0) return false;
+    if (k != placed)
+      placed = k, base = shape_base(o, controls.obstacle_motion[size_t(k)], load_time);
+    const SurfaceDistance at = distance_from(o, base, x[i]);
+    const double gap = o.keep_inside ? -at.distance : at.distance;
+    if (gap <= kOn) held.push_back({i, o.keep_inside ? Vec3(-at.normal) : at.normal, 0.0});
+  }
+  return true;
+}
+
+bool resting_on_obstacles(const Model& model, const Controls& controls, std::span<const Vec3> x,
+                          std::span<const Vec3> v, double load_time, const ContactStep& step,
+                          std::vector<ObstacleContact>& held) {
+  constexpr double kResting = 1e-12;  // m/s: the contact stage's zero, within round-off
+  held.clear();
+  int placed = -1;
+  Vec3 base = Vec3::Zero(), shape_velocity = Vec3::Zero();
+  for (int i = 0; i < model.node_count(); ++i) {
+    const int k = step.touching[i];
+    if (k < 0) continue;
+    const RigidObstacle& o = model.obstacles[size_t(k)];
+    if (o.friction > 0.0) return false;
+    if (k != placed) {
+      placed = k;
+      const Schedule& motion = controls.obstacle_motion[size_t(k)];
+      base = shape_base(o, motion, load_time);
+      shape_velocity = shape_shift(motion, step.start_time, load_time) / step.dt;
+    }
+    const Vec3 n = distance_from(o, base, x[i]).normal;
+    const Vec3 push = o.keep_inside ? Vec3(-n) : n;
+    if ((v[i] - shape_velocity).dot(push) <= kResting) held.push_back({i, push, 0.0});
+  }
+  return true;
+}
+
 }  // namespace phymul

@@ -57,4 +57,19 @@ double apply_contact_velocities(const Model& model, const Controls& controls,
                                 std::span<const Vec3> x, std::span<Vec3> v, double load_time,
                                 ContactStep& step);
 
+// The nodes a position stage moved this step that lie on a frictionless obstacle's surface
+// (within 1e-12 m), each with the way the shape pushes, into `held` (capacity reserved by
+// allocate_data). False, `held` then meaningless, where a touching obstacle has friction.
+bool on_obstacles(const Model& model, const Controls& controls, std::span<const Vec3> x,
+                  double load_time, const ContactStep& step, std::vector<ObstacleContact>& held);
+
+// The nodes a velocity stage left on a frictionless obstacle's surface, not leaving it (their
+// velocity relative to the shape has no outward part above 1e-12 m/s): each with the way the
+// shape pushes, into `held` (capacity reserved by allocate_data). False, `held` then
+// meaningless, where a touching obstacle has friction: its tangential stage does not commute
+// with the volumes' projection.
+bool resting_on_obstacles(const Model& model, const Controls& controls, std::span<const Vec3> x,
+                          std::span<const Vec3> v, double load_time, const ContactStep& step,
+                          std::vector<ObstacleContact>& held);
+
 }  // namespace phymul

@@ -381,6 +381,164 @@ bool project_coupled_volume_velocities(const Model& model, Workspace& w, std::sp
   return true;
 }
 
+namespace {
+
+// Node i's d_k . push over each volume k (d_k = w dV_k/dx from the kept gradients; 0 where
+// the node is not on k), and push . W push (W: its inverse mass, 0 on held axes).
+double along_push(const Model& model, const Workspace& w, const ObstacleContact& c,
+                  std::array<double, kMax>& along) {
+  const Vec3 wi = model.inverse_mass[size_t(c.node)];
+  for (size_t k = 0; k < model.volumes.size(); ++k) {
+    const VolumeConstraint& v = model.volumes[k];
+    const auto at = std::lower_bound(v.nodes.begin(), v.nodes.end(), c.node);
+    along[k] =
+        at != v.nodes.end() && *at == c.node
+            ? (1.0 / 6.0) *
+                  w.volumes[k].gradient[size_t(at - v.nodes.begin())].cwiseProduct(wi).dot(c.push)
+            : 0.0;
+  }
+  return c.push.cwiseProduct(wi).dot(c.push);
+}
+
+// G W G^T from its kept Cholesky factor.
+Square kept_matrix(const Workspace& w, int n) {
+  Square a{};
+  const std::vector<double>& l = w.joint.factor;
+  for (int k = 0; k < n; ++k)
+    for (int m = 0; m <= k; ++m) {
+      double sum = 0.0;
+      for (int p = 0; p <= m; ++p) sum += l[size_t(k * kMax + p)] * l[size_t(m * kMax + p)];
+      a[size_t(k * kMax + m)] = a[size_t(m * kMax + k)] = sum;
+    }
+  return a;
+}
+
+// The Cholesky factor of G W' G^T from a = G W G^T, W' each held node's inverse mass without
+// its push direction (W - W p p^T W / p.W p); false where singular.
+bool held_factor(const Model& model, const Workspace& w, const Square& a,
+                 std::span<const ObstacleContact> held, Square& reduced) {
+  const int n = int(model.volumes.size());
+  reduced = a;
+  std::array<double, kMax> along{};
+  for (const ObstacleContact& c : held) {
+    const double pwp = along_push(model, w, c, along);
+    if (!(pwp > 0.0)) continue;
+    for (int k = 0; k < n; ++k)
+      for (int l = 0; l < n; ++l)
+        reduced[size_t(k * kMax + l)] -= along[size_t(k)] * along[size_t(l)] / pwp;
+  }
+  return cholesky(n, reduced);
+}
+
+// Held node c's reaction: the velocity along its push the volumes' correction would take
+// away, sum_k mu_k d_k . push, over push . W push (> 0: the obstacle pushes).
+double held_reaction(const Model& model, const Workspace& w, const ObstacleContact& c,
+                     const Column& mu) {
+  std::array<double, kMax> along{};
+  const double pwp = along_push(model, w, c, along);
+  if (!(pwp > 0.0)) return 0.0;
+  double s = 0.0;
+  for (size_t k = 0; k < model.volumes.size(); ++k) s += mu[k] * along[k];
+  return s / pwp;
+}
+
+// Solves the held projection's multipliers for `rates` into mu, its factor into `reduced`,
+// releasing the held nodes the obstacle would pull (at most 4 passes; false after, or where
+// singular).
+bool hold_and_solve(const Model& model, const Workspace& w, std::vector<ObstacleContact>& held,
+                    const Column& rates, Square& reduced, Column& mu) {
+  constexpr int kMostPasses = 4;
+  const int n = int(model.volumes.size());
+  const Square a = kept_matrix(w, n);
+  for (int pass = 0;; ++pass) {
+    if (!held_factor(model, w, a, held, reduced)) return false;
+    mu = rates;
+    solve(n, reduced, mu);
+    const auto pulled = [&](const ObstacleContact& c) {
+      return held_reaction(model, w, c, mu) < 0.0;
+    };
+    if (std::none_of(held.begin(), held.end(), pulled)) return true;
+    if (pass + 1 == kMostPasses) return false;
+    held.erase(std::remove_if(held.begin(), held.end(), pulled), held.end());
+  }
+}
+
+// field -= W' G^T mu: along every direction from the kept gradients, then each held node's
+// push part given back (passed to `record` with the node).
+template <class Record>
+void move_held(const Model& model, const Workspace& w, const Column& mu,
+               std::span<const ObstacleContact> held, std::span<Vec3> field, Record record) {
+  for (size_t k = 0; k < model.volumes.size(); ++k)
+    subtract_along(model.volumes[k], mu[k], w.volumes[k].gradient.data(), model.inverse_mass.data(),
+                   field.data());
+  for (const ObstacleContact& c : held) {
+    const Vec3 back = held_reaction(model, w, c, mu) *
+                      Vec3(c.push.cwiseProduct(model.inverse_mass[size_t(c.node)]));
+    field[size_t(c.node)] += back;
+    record(c.node, back);
+  }
+}
+
+}  // namespace
+
+bool project_coupled_volume_velocities_held(const Model& model, Workspace& w,
+                                            std::span<const Vec3> x, std::span<Vec3> v,
+                                            std::vector<ObstacleContact>& held,
+                                            std::span<const int> touching,
+                                            std::span<Vec3> impulse) {
+  if (!usable(model, w) || !kept_linearisation_at(model, w, x)) return false;
+  const int n = int(model.volumes.size());
+  Column rates{}, mu{};
+  for (int k = 0; k < n; ++k)
+    rates[size_t(k)] = (1.0 / 6.0) * local_dot(model.volumes[size_t(k)],
+                                               w.volumes[size_t(k)].gradient.data(), v.data());
+  Square reduced{};
+  if (!hold_and_solve(model, w, held, rates, reduced, mu)) return false;
+  move_held(model, w, mu, held, v, [&](int i, const Vec3& dv) {
+    impulse[size_t(touching[size_t(i)])] += model.mass[size_t(i)] * dv;
+  });
+  return true;
+}
+
+bool reproject_coupled_volumes_held(const Model& model, const Controls& controls, Workspace& w,
+                                    std::span<Vec3> x, double load_time,
+                                    std::vector<ObstacleContact>& held,
+                                    std::span<const int> touching, std::span<Vec3> impulse,
+                                    double dt) {
+  constexpr double kExact = 1e-13, kConverged = 1e-12;  // as project_coupled_volumes
+  constexpr int kMaxIterations = 20;
+  if (!usable(model, w) || !w.joint.factor_valid) return false;
+  const int n = int(model.volumes.size());
+  Column residual{}, mu{};
+  auto worst_error = [&] {
+    double worst = 0.0;
+    for (int k = 0; k < n; ++k) {
+      const double target = target_volume(model, controls, size_t(k), load_time);
+      residual[size_t(k)] = volume(model.volumes[size_t(k)], x) - target;
+      worst = std::max(worst, std::abs(residual[size_t(k)]) / std::abs(target));
+    }
+    return worst;
+  };
+  double worst = worst_error(), previous = std::numeric_limits<double>::infinity();
+  if (worst <= kExact) return true;
+  Square reduced{};
+  // The held set from the first chord step, the largest: a node it would pull is released.
+  if (!hold_and_solve(model, w, held, residual, reduced, mu)) return false;
+  for (int it = 0; it < kMaxIterations; ++it) {
+    if (it > 0) {
+      mu = residual;
+      solve(n, reduced, mu);
+    }
+    move_held(model, w, mu, held, x, [&](int i, const Vec3& dx) {
+      impulse[size_t(touching[size_t(i)])] += model.mass[size_t(i)] * dx / dt;
+    });
+    previous = worst;
+    worst = worst_error();
+    if (worst <= kExact || (worst <= kConverged && worst > 0.25 * previous)) return true;
+  }
+  return false;
+}
+
 // A node against an obstacle may push along the contact normal with any force: that part of
 // its residual and of the gradients' free parts is left out of the least squares (of the
 // residual's and of the support reactions' alike).

@@ -41,9 +41,11 @@ struct Workspace {
   // positions and velocities at a step's start, the accelerations; the Newton-Cotes scheme's
   // second accelerations and projection scratch.
   std::vector<Vec3> x_start, v_start, f_start, a1, scratch;
-  std::vector<ObstacleContact> contacts;  // nodes touching an obstacle now; reserved
-  std::vector<Vec3> contact_impulse;      // per obstacle, N s, this step
-  std::vector<Vec3> pair_impulse;         // per contact pair, N s, this step
+  // Nodes touching an obstacle now (a residual's, an implicit solve's, an explicit velocity
+  // stage's resting ones): scratch, filled and read within one call; reserved.
+  std::vector<ObstacleContact> contacts;
+  std::vector<Vec3> contact_impulse;  // per obstacle, N s, this step
+  std::vector<Vec3> pair_impulse;     // per contact pair, N s, this step
   // The contact pairs' stage: each pair's two surfaces hashed, area-weighted vertex normals.
   std::vector<std::array<TriangleHash, 2>> pair_hashes;
   std::vector<Vec3> vertex_normal;
