@@ -38,9 +38,14 @@ void project_volumes(const Model& model, const Controls& controls, Workspace& wo
 // correction moves it back into the obstacle. Runs `contact` then `volume` until `contact`
 // (returning the largest change it made) changes nothing above `settled`; each round shrinks
 // the change fifty- to a hundredfold, at most 20 rounds. The caller ran both once already.
-template <class Contact, class Volume>
-void alternate_contact_and_volume(Contact&& contact, Volume&& volume, double settled) {
+// Where `can_hold`, the first round's volume stage is `hold` instead, the rounds' limit in
+// one solve (coupled_volume.hpp; false where it could not, and `volume` runs), and the rounds
+// after it finish what it leaves.
+template <class Contact, class Volume, class Hold>
+void alternate_contact_and_volume(Contact&& contact, Volume&& volume, bool can_hold, Hold&& hold,
+                                  double settled) {
   constexpr int kMostRounds = 20;
+  if (can_hold && contact() > 0.0 && !hold()) volume();
   for (int round = 0; round < kMostRounds; ++round) {
     const double changed = contact();
     if (changed == 0.0) return;

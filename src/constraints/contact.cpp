@@ -172,13 +172,23 @@ double apply_contacts(const Model& model, const Controls& controls, std::span<Ve
   return largest;
 }
 
-double apply_contact_velocities(const Model& model, const Controls& controls,
-                                std::span<const Vec3> x, std::span<Vec3> v, double load_time,
-                                ContactStep& step) {
-  double largest = 0.0;
-  if (!model.contact_pairs.empty() && step.pair_contacts)
-    largest = apply_deformable_contact_velocities(model, v, *step.pair_contacts, step.pair_impulse);
-  if (model.obstacles.empty()) return largest;
+namespace {
+
+// A node a contact stage of this step moved, against its obstacle now: the way the shape
+// pushes there, the node's gap (negative inside) and the shape's velocity over the step.
+struct Touch {
+  const RigidObstacle& obstacle;
+  int k;  // the obstacle's index
+  Vec3 push;
+  double gap;
+  Vec3 shape_velocity;
+};
+
+// visit(i, touch) for each node in step.touching, the obstacle placed once per run of nodes
+// on it; false as soon as a visit returns false.
+template <class Visit>
+bool each_touching(const Model& model, const Controls& controls, std::span<const Vec3> x,
+                   double load_time, const ContactStep& step, Visit visit) {
   int placed = -1;  // the obstacle whose base and velocity are below
   Vec3 base = Vec3::Zero(), shape_velocity = Vec3::Zero();
   for (int i = 0; i < model.node_count(); ++i) {
@@ -191,20 +201,37 @@ double apply_contact_velocities(const Model& model, const Controls& controls,
       base = shape_base(o, motion, load_time);
       shape_velocity = shape_shift(motion, step.start_time, load_time) / step.dt;
     }
-    const Vec3 n = distance_from(o, base, x[i]).normal;
-    const Vec3 push = o.keep_inside ? Vec3(-n) : n;  // the way the shape can push
-    const Vec3 u = v[i] - shape_velocity;
-    const double into = -u.dot(push);
-    if (into <= 0.0) continue;  // already leaving the surface
-    Vec3 dv = into * push;
-    const Vec3 tangential = u + into * push;
+    const SurfaceDistance at = distance_from(o, base, x[i]);
+    const Touch touch{o, k, o.keep_inside ? Vec3(-at.normal) : at.normal,
+                      o.keep_inside ? -at.distance : at.distance, shape_velocity};
+    if (!visit(i, touch)) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+double apply_contact_velocities(const Model& model, const Controls& controls,
+                                std::span<const Vec3> x, std::span<Vec3> v, double load_time,
+                                ContactStep& step) {
+  double largest = 0.0;
+  if (!model.contact_pairs.empty() && step.pair_contacts)
+    largest = apply_deformable_contact_velocities(model, v, *step.pair_contacts, step.pair_impulse);
+  if (model.obstacles.empty()) return largest;
+  each_touching(model, controls, x, load_time, step, [&](int i, const Touch& t) {
+    const Vec3 u = v[i] - t.shape_velocity;
+    const double into = -u.dot(t.push);
+    if (into <= 0.0) return true;  // already leaving the surface
+    Vec3 dv = into * t.push;
+    const Vec3 tangential = u + into * t.push;
     const double slip = tangential.norm();
-    if (slip > 0.0) dv -= std::min(1.0, o.friction * into / slip) * tangential;
+    if (slip > 0.0) dv -= std::min(1.0, t.obstacle.friction * into / slip) * tangential;
     dv = dv.cwiseProduct(free_axes_of(model.inverse_mass[i]));
     v[i] += dv;
-    step.impulse[size_t(k)] += model.mass[i] * dv;
+    step.impulse[size_t(t.k)] += model.mass[i] * dv;
     largest = std::max(largest, dv.norm());
-  }
+    return true;
+  });
   return largest;
 }
 
@@ -212,20 +239,11 @@ bool on_obstacles(const Model& model, const Controls& controls, std::span<const 
                   double load_time, const ContactStep& step, std::vector<ObstacleContact>& held) {
   constexpr double kOn = 1e-12;  // m: the projection's surface, within round-off
   held.clear();
-  int placed = -1;
-  Vec3 base = Vec3::Zero();
-  for (int i = 0; i < model.node_count(); ++i) {
-    const int k = step.touching[i];
-    if (k < 0) continue;
-    const RigidObstacle& o = model.obstacles[size_t(k)];
-    if (o.friction > 0.0) return false;
-    if (k != placed)
-      placed = k, base = shape_base(o, controls.obstacle_motion[size_t(k)], load_time);
-    const SurfaceDistance at = distance_from(o, base, x[i]);
-    const double gap = o.keep_inside ? -at.distance : at.distance;
-    if (gap <= kOn) held.push_back({i, o.keep_inside ? Vec3(-at.normal) : at.normal, 0.0});
-  }
-  return true;
+  return each_touching(model, controls, x, load_time, step, [&](int i, const Touch& t) {
+    if (t.obstacle.friction > 0.0) return false;
+    if (t.gap <= kOn) held.push_back({i, t.push, 0.0});
+    return true;
+  });
 }
 
 bool resting_on_obstacles(const Model& model, const Controls& controls, std::span<const Vec3> x,
@@ -233,24 +251,11 @@ bool resting_on_obstacles(const Model& model, const Controls& controls, std::spa
                           std::vector<ObstacleContact>& held) {
   constexpr double kResting = 1e-12;  // m/s: the contact stage's zero, within round-off
   held.clear();
-  int placed = -1;
-  Vec3 base = Vec3::Zero(), shape_velocity = Vec3::Zero();
-  for (int i = 0; i < model.node_count(); ++i) {
-    const int k = step.touching[i];
-    if (k < 0) continue;
-    const RigidObstacle& o = model.obstacles[size_t(k)];
-    if (o.friction > 0.0) return false;
-    if (k != placed) {
-      placed = k;
-      const Schedule& motion = controls.obstacle_motion[size_t(k)];
-      base = shape_base(o, motion, load_time);
-      shape_velocity = shape_shift(motion, step.start_time, load_time) / step.dt;
-    }
-    const Vec3 n = distance_from(o, base, x[i]).normal;
-    const Vec3 push = o.keep_inside ? Vec3(-n) : n;
-    if ((v[i] - shape_velocity).dot(push) <= kResting) held.push_back({i, push, 0.0});
-  }
-  return true;
+  return each_touching(model, controls, x, load_time, step, [&](int i, const Touch& t) {
+    if (t.obstacle.friction > 0.0) return false;
+    if ((v[i] - t.shape_velocity).dot(t.push) <= kResting) held.push_back({i, t.push, 0.0});
+    return true;
+  });
 }
 
 }  // namespace phymul

@@ -17,6 +17,16 @@ constexpr int kMax = kMaxJointVolumes;
 using Square = std::array<double, kMax * kMax>;  // row k, column l at [k * kMax + l]
 using Column = std::array<double, kMax>;
 
+// The position projections' chord iterations: relative volume errors and their most steps.
+constexpr double kExact = 1e-13;      // the sweeps stopped at 1e-12
+constexpr double kConverged = 1e-12;  // accepted where round-off stops the progress
+constexpr int kMaxIterations = 20;
+
+// A chord step's error `worst` after `previous`: on the targets.
+bool landed(double worst, double previous) {
+  return worst <= kExact || (worst <= kConverged && worst > 0.25 * previous);
+}
+
 // 1 on the axes a node is free to move along, 0 on those a position constraint holds.
 Vec3 free_axes(const Vec3& inverse_mass) {
   return (inverse_mass.array() > 0.0).cast<double>().matrix();
@@ -305,9 +315,6 @@ bool project_coupled_volumes(const Model& model, const Controls& controls, Works
   // Chord iterations on V_k(x0 + sum_j lambda_j d_j) = target_k with the Jacobian at x0,
   // G W G^T: exact to first order, so each iteration squares the relative error (1e-6 ->
   // 1e-12 -> round-off) and costs only the volumes, not their gradients.
-  constexpr double kExact = 1e-13;      // relative; the sweeps stopped at 1e-12
-  constexpr double kConverged = 1e-12;  // accepted where round-off stops the progress
-  constexpr int kMaxIterations = 20;
   // From an error this small, the first chord step lands within round-off: its volumes are
   // then taken with the gradients at the projected positions, which the velocity projection
   // needs next (one gradient pass a step instead of two). A later step, with the Jacobian of
@@ -348,7 +355,7 @@ bool project_coupled_volumes(const Model& model, const Controls& controls, Works
     }
     previous = worst;
     worst = worst_error();
-    if (worst <= kExact || (worst <= kConverged && worst > 0.25 * previous)) return true;
+    if (landed(worst, previous)) return true;
   }
   return false;
 }
@@ -505,8 +512,6 @@ bool reproject_coupled_volumes_held(const Model& model, const Controls& controls
                                     std::vector<ObstacleContact>& held,
                                     std::span<const int> touching, std::span<Vec3> impulse,
                                     double dt) {
-  constexpr double kExact = 1e-13, kConverged = 1e-12;  // as project_coupled_volumes
-  constexpr int kMaxIterations = 20;
   if (!usable(model, w) || !w.joint.factor_valid) return false;
   const int n = int(model.volumes.size());
   Column residual{}, mu{};
@@ -534,7 +539,7 @@ bool reproject_coupled_volumes_held(const Model& model, const Controls& controls
     });
     previous = worst;
     worst = worst_error();
-    if (worst <= kExact || (worst <= kConverged && worst > 0.25 * previous)) return true;
+    if (landed(worst, previous)) return true;
   }
   return false;
 }

@@ -39,22 +39,19 @@ void apply_position_constraints(const Model& model, const Controls& controls, Wo
   project_volumes(model, controls, work, x, load_time, scratch, contact.x_start);
   // The volume's projection moves a node on an obstacle back into it (0.2 um on the prostate,
   // 20 um on a filling bladder): rounds until the obstacles move none above 1 nm (the
-  // 1e-15 m of round-off took twice the rounds, +50 % on a step).
-  if (!model.obstacles.empty() && !model.volumes.empty()) {
-    // Frictionless obstacles alone: the rounds' limit in one projection, the held nodes'
-    // pushes taken out of it; the rounds finish what it leaves (a curved surface's second
-    // order, a node it pushed in).
-    if (model.coupled_volumes && model.contact_pairs.empty() && model.needles.empty() &&
-        apply_contacts(model, controls, x, load_time, contact) > 0.0 &&
-        !(on_obstacles(model, controls, x, load_time, contact, work.contacts) &&
-          reproject_coupled_volumes_held(model, controls, work, x, load_time, work.contacts,
-                                         contact.touching, contact.impulse, contact.dt)))
-      project_volumes(model, controls, work, x, load_time, scratch, contact.x_start);
+  // 1e-15 m of round-off took twice the rounds, +50 % on a step). Frictionless obstacles
+  // alone: the rounds' limit in one projection first, the held nodes' pushes taken out of it.
+  if (!model.obstacles.empty() && !model.volumes.empty())
     alternate_contact_and_volume(
         [&] { return apply_contacts(model, controls, x, load_time, contact); },
         [&] { project_volumes(model, controls, work, x, load_time, scratch, contact.x_start); },
+        model.coupled_volumes && model.contact_pairs.empty() && model.needles.empty(),
+        [&] {
+          return on_obstacles(model, controls, x, load_time, contact, work.contacts) &&
+                 reproject_coupled_volumes_held(model, controls, work, x, load_time, work.contacts,
+                                                contact.touching, contact.impulse, contact.dt);
+        },
         1e-9 /* m */);
-  }
   project_doubled(model, x);
 }
 
