@@ -107,6 +107,8 @@ class ResumeExample : public ::testing::TestWithParam<std::string> {
     static_ = read_text(full_ / "report.json").find("\"mode\": \"static\"") != std::string::npos;
     ASSERT_GT(steps_, 4) << "the example is too short to interrupt";
   }
+  void interrupt_by_sigint_and_resume();
+  void kill_after_a_periodic_checkpoint_and_resume();
   TempDir dir_;
   std::string scene_;
   fs::path full_;
@@ -114,7 +116,7 @@ class ResumeExample : public ::testing::TestWithParam<std::string> {
   bool static_ = false;
 };
 
-TEST_P(ResumeExample, InterruptedBySigintAndResumedWritesTheSameFiles) {
+void ResumeExample::interrupt_by_sigint_and_resume() {
   const fs::path part = dir_.path() / "sigint";
   std::set<std::string> stops;  // static: where the interruptions fell
   // Dynamic: one interruption, 40 % of the way. Static: one at every progress check.
@@ -143,7 +145,7 @@ TEST_P(ResumeExample, InterruptedBySigintAndResumedWritesTheSameFiles) {
   expect_same_results(full_, part);
 }
 
-TEST_P(ResumeExample, KilledAfterAPeriodicCheckpointAndResumedWritesTheSameFiles) {
+void ResumeExample::kill_after_a_periodic_checkpoint_and_resume() {
   const fs::path part = dir_.path() / "sigkill";
   // Static runs check (and so checkpoint) only every 256 relaxation iterations and at the
   // end of load steps: every check writes one there.
@@ -159,6 +161,17 @@ TEST_P(ResumeExample, KilledAfterAPeriodicCheckpointAndResumedWritesTheSameFiles
   EXPECT_LT(at, pause);  // the periodic one before the kill
   ASSERT_EQ(run_plain("--resume " + part.string()), 0);
   expect_same_results(full_, part);
+}
+
+// One test for both interruptions, so that the uninterrupted run is made once: the examples'
+// runs are most of the suite's time under the sanitizers.
+TEST_P(ResumeExample, InterruptedOrKilledAndResumedWritesTheSameFiles) {
+  {
+    SCOPED_TRACE("SIGINT, then --resume");
+    interrupt_by_sigint_and_resume();
+  }
+  SCOPED_TRACE("SIGKILL after a periodic checkpoint, then --resume");
+  kill_after_a_periodic_checkpoint_and_resume();
 }
 
 INSTANTIATE_TEST_SUITE_P(Examples, ResumeExample, ::testing::ValuesIn(example_scenes()),
