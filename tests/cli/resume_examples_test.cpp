@@ -1,8 +1,8 @@
 // Every scene in examples/ resumes bit for bit: run whole, then interrupted by a real SIGINT
-// part way and resumed, then killed by SIGKILL after a periodic checkpoint and resumed; each
-// time the frames, monitors.csv and report.json (wall-clock fields aside) are the
-// uninterrupted run's, byte for byte. Static runs are interrupted at every progress check (so
-// within load steps and between them). The signals come from this test while the run is held
+// part way and resumed, and killed by SIGKILL after a periodic checkpoint and resumed; the
+// frames, monitors.csv and report.json (wall-clock fields aside) are the uninterrupted run's,
+// byte for byte. Static runs are interrupted at every progress check (so within load steps
+// and between them). The signals come from this test while the run is held
 // stopped at a known step (--pause-after: SIGSTOP there), so that none arrives too late.
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -109,6 +109,7 @@ class ResumeExample : public ::testing::TestWithParam<std::string> {
   }
   void interrupt_by_sigint_and_resume();
   void kill_after_a_periodic_checkpoint_and_resume();
+  void interrupt_kill_and_resume();
   TempDir dir_;
   std::string scene_;
   fs::path full_;
@@ -116,11 +117,11 @@ class ResumeExample : public ::testing::TestWithParam<std::string> {
   bool static_ = false;
 };
 
+// Static runs: SIGINT at every progress check, each time resumed.
 void ResumeExample::interrupt_by_sigint_and_resume() {
   const fs::path part = dir_.path() / "sigint";
-  std::set<std::string> stops;  // static: where the interruptions fell
-  // Dynamic: one interruption, 40 % of the way. Static: one at every progress check.
-  long pause = static_ ? 1 : steps_ * 2 / 5;
+  std::set<std::string> stops;  // where the interruptions fell
+  long pause = 1;
   for (int round = 0;; ++round) {
     ASSERT_LT(round, 200) << "the run never ended";
     std::vector<std::string> args{"--resume", part.string()};
@@ -131,29 +132,22 @@ void ResumeExample::interrupt_by_sigint_and_resume() {
     ASSERT_EQ(exit, 130) << "round " << round;
     const Checkpoint c = read_checkpoint(part / "checkpoint.bin");
     EXPECT_GE(progress_of(c), pause);
-    if (!static_) {
-      EXPECT_EQ(c.steps_done, pause);
-      pause = steps_ + 1;  // no more
-      continue;
-    }
     stops.insert(c.data.static_progress.step_iterations > 0 ? "within" : "between");
     pause = progress_of(c) + 1;
   }
-  if (static_) {
-    EXPECT_FALSE(stops.empty()) << "never interrupted";
-  }
+  EXPECT_FALSE(stops.empty()) << "never interrupted";
   expect_same_results(full_, part);
 }
 
+// Static runs: SIGKILL after a periodic checkpoint, then resumed. They check (and so
+// checkpoint) only every 256 relaxation iterations and at the end of load steps: every check
+// writes one with --checkpoint-every 1.
 void ResumeExample::kill_after_a_periodic_checkpoint_and_resume() {
   const fs::path part = dir_.path() / "sigkill";
-  // Static runs check (and so checkpoint) only every 256 relaxation iterations and at the
-  // end of load steps: every check writes one there.
-  const long every = static_ ? 1 : std::max(1L, steps_ / 4), pause = steps_ * 3 / 5;
-  const int exit =
-      run_signalled({scene_, "-o", part.string(), "--checkpoint-every",
-                     std::to_string(every) + " steps", "--pause-after", std::to_string(pause)},
-                    SIGKILL);
+  const long pause = steps_ * 3 / 5;
+  const int exit = run_signalled({scene_, "-o", part.string(), "--checkpoint-every", "1 steps",
+                                  "--pause-after", std::to_string(pause)},
+                                 SIGKILL);
   ASSERT_EQ(exit, -SIGKILL);
   ASSERT_TRUE(fs::is_regular_file(part / "checkpoint.bin"));
   const long at = progress_of(read_checkpoint(part / "checkpoint.bin"));
@@ -163,11 +157,36 @@ void ResumeExample::kill_after_a_periodic_checkpoint_and_resume() {
   expect_same_results(full_, part);
 }
 
-// One test for both interruptions, so that the uninterrupted run is made once: the examples'
-// runs are most of the suite's time under the sanitizers.
+// Dynamic runs, one chain: SIGINT 40 % of the way; resumed with periodic checkpoints and
+// killed by SIGKILL at 80 %, after the one at 65 %; resumed again to the end. Two resumes for
+// little more than one run's time (the examples' runs are most of the sanitized suite's).
+void ResumeExample::interrupt_kill_and_resume() {
+  const fs::path part = dir_.path() / "chain";
+  const long first = steps_ * 2 / 5, second = steps_ * 4 / 5, every = std::max(1L, steps_ / 4);
+  ASSERT_EQ(
+      run_signalled({scene_, "-o", part.string(), "--pause-after", std::to_string(first)}, SIGINT),
+      130);
+  EXPECT_EQ(read_checkpoint(part / "checkpoint.bin").steps_done, first);
+  ASSERT_EQ(
+      run_signalled({"--resume", part.string(), "--checkpoint-every",
+                     std::to_string(every) + " steps", "--pause-after", std::to_string(second)},
+                    SIGKILL),
+      -SIGKILL);
+  const long at = read_checkpoint(part / "checkpoint.bin").steps_done;
+  EXPECT_GT(at, first);  // the resumed run's periodic one, before the kill
+  EXPECT_LT(at, second);
+  ASSERT_EQ(run_plain("--resume " + part.string()), 0);
+  expect_same_results(full_, part);
+}
+
+// One test per example, so that the uninterrupted run is made once.
 TEST_P(ResumeExample, InterruptedOrKilledAndResumedWritesTheSameFiles) {
+  if (!static_) {
+    interrupt_kill_and_resume();
+    return;
+  }
   {
-    SCOPED_TRACE("SIGINT, then --resume");
+    SCOPED_TRACE("SIGINT at every progress check, each time --resume");
     interrupt_by_sigint_and_resume();
   }
   SCOPED_TRACE("SIGKILL after a periodic checkpoint, then --resume");
