@@ -31,11 +31,10 @@ test: build
 # SANITIZE_TESTS picks the tests by ctest arguments (CI: -LE study, every label but study).
 SANITIZE_TESTS ?=
 ASAN_DIR = $(BUILD)-asan
-ASAN_OPT ?= -O1
 
 asan-configure: deps-sanitize
 	@cmake -S . -B $(ASAN_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++-14 \
-		-DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$(ASAN_OPT) -g" -DPHYMUL_SANITIZE=ON -DPHYMUL_FUZZ=ON \
+		-DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DPHYMUL_SANITIZE=ON -DPHYMUL_FUZZ=ON \
 		-DPHYMUL_BENCH=OFF > $(ASAN_DIR).configure.log 2>&1 || (cat $(ASAN_DIR).configure.log; exit 1)
 
 test-asan: asan-configure
