@@ -241,7 +241,8 @@ std::vector<Parameter> simulation_parameters() {
               "(rotations fitted per node, then one prefactorised sparse solve), stable at any "
               "dt, for elastic shape-memory, active and rigid objects with gravity, forces, "
               "pressures, fixed and prescribed nodes, springs, stitches, doubled nodes, volume "
-              "constraints and frictionless obstacles (see docs/implicit.md). Static mode "
+              "constraints and obstacles, with Coulomb friction or not (see docs/implicit.md). "
+              "Static mode "
               "relaxes with Verlet pseudo-dynamics unless `solver: implicit`.",
        .lands = lands(&SimulationSpec::integrator)},
       {.section = "simulation",

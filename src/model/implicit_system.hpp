@@ -68,6 +68,9 @@ struct ImplicitSystem {
     int obstacle = -1, pair = -1;  // whose row (the other -1); side: the node's in the pair
     int side = 0;
     double into = 0.0;  // N: the residual's push along the row (< 0: into the surface)
+    // A sticking node's row along a tangent of its obstacle (solver/implicit_friction.cpp):
+    // the index in `active` of the node's normal row, whose release releases it; -1 otherwise.
+    int normal_row = -1;
   };
   std::vector<Contact> active;
   std::vector<double> touching_gap;    // per Workspace::contacts entry: its gap
@@ -107,6 +110,10 @@ struct ImplicitSystem {
   // Per node, the obstacle the step's last solve held it against (-1: none): it stays a
   // constraint, on the surface or not, until its multiplier releases it.
   std::vector<int> held_by;
+  // Coulomb friction on obstacles (solver/implicit_friction.cpp): per node, whether the last
+  // residual found it sliding; per obstacle, its shape's shift over the step.
+  std::vector<char> sliding;
+  std::vector<Eigen::Vector3d> obstacle_shift;
   // Anderson acceleration of the iterations (solver/implicit_anderson.cpp): the last few
   // iterates and their images under one iteration, per node, in rings of `depth + 1`
   // (empty: not used for this model); how many the rings hold, and the newest's slot.

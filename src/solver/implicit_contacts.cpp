@@ -282,12 +282,15 @@ void solve_held(ImplicitSystem& s, int volumes) {
 bool release_tensile(ImplicitSystem& s, int volumes) {
   solve_held(s, volumes);
   bool released = false;
-  for (int c = 0; c < int(s.active.size()); ++c)
-    if (s.held[size_t(c)] && s.multiplier[size_t(volumes + c)] > 0.0 &&
-        s.active[size_t(c)].into >= 0.0) {
-      s.held[size_t(c)] = 0;
-      released = true;
-    }
+  for (int c = 0; c < int(s.active.size()); ++c) {
+    if (!s.held[size_t(c)]) continue;
+    const ImplicitSystem::Contact& cc = s.active[size_t(c)];
+    // A tangent row (friction) goes with its node's normal row, which comes before it.
+    const bool release = cc.normal_row >= 0
+                             ? !s.held[size_t(cc.normal_row)]
+                             : s.multiplier[size_t(volumes + c)] > 0.0 && cc.into >= 0.0;
+    if (release) s.held[size_t(c)] = 0, released = true;
+  }
   return released;
 }
 
@@ -351,7 +354,10 @@ void prepare_implicit_contacts(const Model& model, ImplicitSystem& s) {
       s.columns[size_t(a)].resize(size_t(s.column_capacity) * size_t(s.unknowns[size_t(a)]));
     }
   }
-  const size_t obstacle_rows = size_t(model.node_count()) * model.obstacles.size();
+  // A node on a rough obstacle may stick: two tangent rows beside its normal one.
+  size_t obstacle_rows = 0;
+  for (const RigidObstacle& o : model.obstacles)
+    obstacle_rows += size_t(model.node_count()) * (o.friction > 0.0 ? 3 : 1);
   s.pair_rows.clear();
   if (pair_nodes > 0) prepare_pair_rows(model, s);
   s.row_capacity = int(std::min(obstacle_rows + s.pair_rows.capacity(), size_t(kMaxContactRows)));
@@ -387,7 +393,8 @@ void constrain_to_contacts(const Model& model, ImplicitSystem& s,
   for (const ImplicitSystem::Contact& cc : s.active)
     (cc.pair >= 0 ? s.pair_held : s.held_by)[size_t(cc.nodes[0])] = -1;
   for (int c = 0; c < contacts; ++c)
-    if (const ImplicitSystem::Contact& cc = s.active[size_t(c)]; s.held[size_t(c)])
+    if (const ImplicitSystem::Contact& cc = s.active[size_t(c)];
+        s.held[size_t(c)] && cc.normal_row < 0)
       (cc.pair >= 0 ? s.pair_held : s.held_by)[size_t(cc.nodes[0])] =
           cc.pair >= 0 ? cc.pair : cc.obstacle;
   for (int l = 0; l < volumes; ++l)

@@ -30,6 +30,7 @@
 #include "solver/implicit_anderson.hpp"
 #include "solver/implicit_bodies.hpp"
 #include "solver/implicit_contacts.hpp"
+#include "solver/implicit_friction.hpp"
 #include "solver/implicit_matrix.hpp"
 #include "solver/implicit_pairs.hpp"
 #include "solver/implicit_solve.hpp"
@@ -76,11 +77,6 @@ constexpr size_t kMostCoupledBlocks = size_t(1) << 18;
 // fitted to the current gradients.
 constexpr double kStaleGradient = 0.5;
 
-bool with_friction(const Model& model) {
-  return std::any_of(model.obstacles.begin(), model.obstacles.end(),
-                     [](const RigidObstacle& o) { return o.friction > 0.0; });
-}
-
 bool has_free_body(const Model& model) {
   return std::any_of(model.rigid_bodies.begin(), model.rigid_bodies.end(),
                      [](const RigidBody& r) { return !r.driven; });
@@ -98,7 +94,6 @@ bool pair_with_rigid(const Model& model) {
 
 void refuse_unsupported(const Model& model) {
   const char* what = !model.explicit_fem.empty() ? "explicit finite elements"
-                     : with_friction(model)      ? "obstacles with friction"
                      : pair_with_rigid(model)    ? "contact pairs with a rigid object"
                      : model.volumes.size() > size_t(kMaxVolumes)
                          ? "more than 16 volume constraints"
@@ -286,6 +281,7 @@ void prepare(const Model& model, ImplicitSystem& s, double h) {
   s.block.assign(std::max(most * 3 * (1 + model.volumes.size()), 3 * s.block_unknown.size()), 0.0);
   if (s.coupled) solve_rest_gradients(model, s);
   prepare_implicit_contacts(model, s);
+  prepare_implicit_friction(model, s);
   prepare_anderson(model, s);
   s.h = h;
 }
@@ -484,7 +480,11 @@ void remove_reactions(const Model& model, Data& d, ImplicitSystem& s) {
     for (int a = 0; a < 3; ++a)
       if (const int u = s.unknown[size_t(a)][size_t(c.node)]; u >= 0)
         s.residual[size_t(a)][u] -= into * c.push[a];
-    d.contact_force[size_t(d.obstacle_touching[size_t(c.node)])] -= into * c.push;
+    Vec3& force = d.contact_force[size_t(d.obstacle_touching[size_t(c.node)])];
+    force -= into * c.push;
+    if (model.obstacles[size_t(row.obstacle)].friction > 0.0)
+      force +=
+          add_friction(model, d, s, c.node, c.push, row.obstacle, -into, int(s.active.size()) - 1);
   }
 }
 
@@ -639,12 +639,15 @@ void first_guess(const Model& model, Data& d, double h, double load_time,
   project_positions(model, d, load_time);
 }
 
-// Which nodes the last solve held on which obstacle, in one number (equal sets, equal numbers;
-// unequal ones differ but for a collision of the hash).
+// Which nodes the last solve held on which obstacle, and which of them slide on a rough one,
+// in one number (equal sets, equal numbers; unequal ones differ but for a collision of the
+// hash).
 long held_signature(const ImplicitSystem& s) {
   unsigned long sum = 0;
   for (size_t i = 0; i < s.held_by.size(); ++i)
-    if (s.held_by[i] >= 0) sum = sum * 1000003u + (i + 1) * unsigned(s.held_by[i] + 1);
+    if (s.held_by[i] >= 0)
+      sum = sum * 1000003u + (i + 1) * unsigned(s.held_by[i] + 1) *
+                                 (s.sliding.empty() ? 1u : 2u + unsigned(s.sliding[i]));
   return long(sum >> 1);
 }
 
@@ -663,6 +666,10 @@ void backward_euler_step(const Model& model, Data& d, double h, double load_time
                          double tolerance, std::span<Vec3> acceleration, bool statics) {
   Workspace& w = *d.work;
   ImplicitSystem& s = w.implicit;
+  if (statics && with_friction(model))  // see check_implicit_scene
+    throw std::invalid_argument(
+        "the implicit static solver does not support obstacles with friction: use the "
+        "relaxation");
   if (!(s.h == h)) {
     prepare(model, s, h);
     // Room for a record of every pair row (a checkpoint's or a copy's may hold only its own).
@@ -670,6 +677,7 @@ void backward_euler_step(const Model& model, Data& d, double h, double load_time
   }
   const int n = model.node_count();
   first_guess(model, d, h, load_time, acceleration, tolerance);
+  start_friction(model, d, s, load_time);
   restart_anderson(s);
   // Not in the static solver's steps: there the strip of ImplicitFibres.* took 7 steps with
   // it against 4 without.

@@ -148,20 +148,25 @@ TEST(Simulator, OrganExampleStepsDoNotAllocate) {
   }
 }
 
-// Implicit steps against an obstacle: the contacts' columns of P^-1 and their Schur
-// complement live in storage sized when the matrix is factorised.
+// Implicit steps against an obstacle, smooth or rough: the contacts' columns of P^-1, their
+// Schur complement and the friction's state live in storage sized when the matrix is
+// factorised.
 TEST(Simulator, ImplicitStepsAgainstAnObstacleDoNotAllocate) {
   if (!PHYMUL_COUNT_ALLOCATIONS) GTEST_SKIP() << "allocations are counted in the normal build only";
-  Scene scene = load_scene(testing::source_dir() / "examples" / "bladder_filling.yaml");
-  scene.simulation.integrator = Integrator::implicit;
-  scene.obstacles.at(0).position.z() = -0.029;  // the floor under the bladder's bottom at once
-  scene.objects.at(0).mesh.subdivisions = 2;    // 162 nodes
-  Simulator sim(compile_scene(scene));
-  sim.set_dt(10.0 * sim.dt());
-  while (sim.data().contact_force.at(0).norm() == 0.0) sim.step();  // on the floor
-  const auto [count, residual] = allocations_in_steps(sim);
-  EXPECT_EQ(count, 0);
-  EXPECT_GT(sim.data().contact_force[0].z(), 0.0);
+  for (double friction : {0.0, 0.5}) {
+    SCOPED_TRACE(friction);
+    Scene scene = load_scene(testing::source_dir() / "examples" / "bladder_filling.yaml");
+    scene.simulation.integrator = Integrator::implicit;
+    scene.obstacles.at(0).position.z() = -0.029;  // the floor under the bladder's bottom at once
+    scene.obstacles.at(0).friction = friction;
+    scene.objects.at(0).mesh.subdivisions = 2;  // 162 nodes
+    Simulator sim(compile_scene(scene));
+    sim.set_dt(10.0 * sim.dt());
+    while (sim.data().contact_force.at(0).norm() == 0.0) sim.step();  // on the floor
+    const auto [count, residual] = allocations_in_steps(sim);
+    EXPECT_EQ(count, 0);
+    EXPECT_GT(sim.data().contact_force[0].z(), 0.0);
+  }
 }
 
 // The muscle example (fibres, a free and a held rigid body, doubled nodes, a volume): its
