@@ -166,7 +166,7 @@ std::vector<Parameter> scene_parameters() {
        .kind = Kind::list,
        .default_note = "none",
        .child = "contact",
-       .doc = "Pairs of deformable objects in contact with each other."},
+       .doc = "Pairs of objects in contact with each other (deformable, or one a driven rigid object)."},
       {.section = "scene",
        .name = "needles",
        .kind = Kind::list,
@@ -1140,7 +1140,7 @@ std::vector<Parameter> interaction_parameters() {
        .kind = Kind::names,
        .range = closed(2, 2),
        .required = true,
-       .doc = "The two objects in contact (distinct)."},
+       .doc = "The two objects in contact (distinct; a rigid one must be driven: `motion:`)."},
   };
 }
 

@@ -1,5 +1,5 @@
-// What `integrator: implicit` cannot take yet (finite elements, contacts with a rigid object,
-// needles), found in the scene before compiling: one diagnostic
+// What `integrator: implicit` cannot take yet (finite elements, needles; friction in the
+// static solver), found in the scene before compiling: one diagnostic
 // each, at the field.
 #include <fmt/format.h>
 
@@ -26,9 +26,8 @@ std::string implicit_static_at(const SimulationSpec& s) {
 constexpr const char* kTakes =
     "it takes elastic shape-memory, active and rigid objects with gravity, 'force' loads, "
     "pressures, 'fixed', 'displacement' and 'spring' constraints, stitches, doubled nodes, "
-    "volume constraints, obstacles (with friction or not) and contacts between deformable objects; "
-    "use "
-    "'integrator: verlet'";
+    "volume constraints, obstacles (with friction or not) and contacts; use 'integrator: "
+    "verlet'";
 
 template <class Spec>
 void refuse_all(const std::vector<Spec>& specs, const char* what, const std::string& at,
@@ -62,14 +61,6 @@ void check_implicit_scene(const Scene& scene, std::vector<Diagnostic>& problems)
                        "implicit'{}: use 'solver: relaxation' (friction is taken by "
                        "'integrator: implicit' in dynamics)",
                        o.name.empty() ? fmt::format("obstacle{}", k) : o.name, o.friction, at)});
-  for (const ContactSpec& c : scene.contacts)
-    for (const std::string& name : c.objects)
-      for (const ObjectSpec& o : scene.objects)
-        if (o.name == name && o.type == ObjectType::rigid)
-          problems.push_back(
-              {c.loc, fmt::format("contacts with the rigid object '{}' are not supported by "
-                                  "'integrator: implicit'{}: {}",
-                                  name, at, kTakes)});
   refuse_all(scene.needles, "needles", at, problems);
 }
 

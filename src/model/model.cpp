@@ -261,6 +261,15 @@ void add_contact_pair(Model& model, int component_a, int component_b) {
   pair.components = {component_a, component_b};
   for (int side = 0; side < 2; ++side) {
     const Component& c = model.components[size_t(pair.components[size_t(side)])];
+    // The contact moves its nodes by their inverse masses, which a rigid body's nodes do not
+    // have: a free body would pass through (its motion takes no contact impulse yet).
+    for (const RigidBody& body : model.rigid_bodies)
+      if (body.component == pair.components[size_t(side)] && !body.driven)
+        throw std::invalid_argument(fmt::format(
+            "contact: the rigid object '{}' is free (no 'motion'), and a contact does not move a "
+            "free rigid body yet: give it a 'motion' (motion: {{}} holds it in place), or make "
+            "it an obstacle",
+            c.name));
     if (c.boundary.empty())
       throw std::invalid_argument(
           fmt::format("contact: object '{}' has no closed boundary surface to touch with", c.name));

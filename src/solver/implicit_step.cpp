@@ -82,19 +82,8 @@ bool has_free_body(const Model& model) {
                      [](const RigidBody& r) { return !r.driven; });
 }
 
-// Whether a contact pair has a rigid side, whose nodes the bodies' unknowns move.
-bool pair_with_rigid(const Model& model) {
-  return std::any_of(model.contact_pairs.begin(), model.contact_pairs.end(),
-                     [&](const ContactPair& p) {
-                       return std::any_of(p.components.begin(), p.components.end(), [&](int c) {
-                         return model.components[size_t(c)].kind == ObjectType::rigid;
-                       });
-                     });
-}
-
 void refuse_unsupported(const Model& model) {
   const char* what = !model.explicit_fem.empty() ? "explicit finite elements"
-                     : pair_with_rigid(model)    ? "contact pairs with a rigid object"
                      : model.volumes.size() > size_t(kMaxVolumes)
                          ? "more than 16 volume constraints"
                          : nullptr;

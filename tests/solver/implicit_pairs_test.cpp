@@ -143,3 +143,92 @@ TEST(ImplicitPairs, FreeBallsCollideKeepingTheirMomentum) {
 
 }  // namespace
 }  // namespace phymul
+
+namespace phymul {
+namespace {
+
+// A soft ball held by its far cap and a ball pressed 4 mm into it over 0.6 s: the pressing
+// ball rigid and driven by the schedule (an instrument), or elastic with every node moved by
+// it. In implicit steps of 5 ms (static: the implicit static solver to 1e-10 N).
+Model pressed_ball(bool rigid, bool statics) {
+  Model model;
+  const MaterialSpec soft = testing::material(100.0);
+  const int left = add_elastic_component(
+      model, "left", make_ellipsoid_volume({0.01, 0.01, 0.01}, 2, 2, Vec3(-0.0102, 0, 0)), soft);
+  const Mesh ball = make_ellipsoid_volume({0.01, 0.01, 0.01}, 2, 2, Vec3(0.0102, 0.002, 0));
+  const Schedule push{{0.0, 0.6}, {Vec3::Zero(), Vec3(-0.004, 0, 0)}};
+  int right = 0;
+  if (rigid) {
+    right = add_rigid_component(model, "right", ball, soft, true, push);
+  } else {
+    right = add_elastic_component(model, "right", ball, soft);
+    add_prescribed_displacement(model,
+                                {model.components[size_t(right)].nodes, {true, true, true}, push});
+  }
+  std::vector<int> cap;
+  for (int i : model.components[size_t(left)].nodes)
+    if (model.rest_position[size_t(i)].x() < -0.018) cap.push_back(i);
+  add_fixed_nodes(model, cap);
+  add_contact_pair(model, left, right);
+  model.damping = 20.0;
+  model.settings.integrator = Integrator::implicit;
+  model.settings.implicit_tolerance = 1e-10;
+  model.settings.implicit_iterations = 500;
+  model.settings.dt = 5e-3;
+  if (statics) {
+    model.settings.mode = SolveMode::static_equilibrium;
+    model.settings.solver = StaticSolver::implicit;
+    model.settings.tolerance = 1e-10;
+    model.settings.duration = 0.6;
+  }
+  finalize(model);
+  return model;
+}
+
+// Pushed by implicit steps, then relaxed at the push's end by the implicit static solver (the
+// static residual does not see a node inside the other ball: a contact acts in steps).
+Simulator pressed_and_relaxed(bool rigid) {
+  Simulator run(pressed_ball(rigid, false));
+  int most = 0;
+  while (run.data().time < 0.6 - 1e-12) {
+    run.step();
+    EXPECT_LE(implicit_residual_force(run.data()), 1e-10) << "t = " << run.data().time;
+    most = std::max(most, implicit_iterations(run.data()));
+  }
+  Simulator sim(pressed_ball(rigid, true));
+  sim.data() = run.data();
+  const StaticResult r = sim.solve_static();
+  EXPECT_TRUE(r.converged) << r.residual;
+  std::printf("%s: at most %d solves a step, then %ld static steps\n",
+              rigid ? "rigid" : "moved node by node", most, r.iterations);
+  return sim;
+}
+
+// The pressing ball as a driven rigid object: the same equilibrium as the elastic ball moved
+// node by node (to the tolerance's share of the push), no node inside the other ball, and the
+// contact's push taken by the soft ball's held cap.
+TEST(ImplicitPairs, ADrivenRigidBallPressesAsABallMovedNodeByNode) {
+  const Simulator rigid = pressed_and_relaxed(true), moved = pressed_and_relaxed(false);
+  const Vec3 push = rigid.data().pair_contact_force[0];
+  const auto [depth, touching] = deepest(rigid.model(), rigid.data().x);
+  double gap = 0.0, sag = 0.0;
+  for (int i : rigid.model().components[0].nodes) {
+    gap = std::max(gap, (rigid.data().x[size_t(i)] - moved.data().x[size_t(i)]).norm());
+    sag =
+        std::max(sag, (rigid.data().x[size_t(i)] - rigid.model().rest_position[size_t(i)]).norm());
+  }
+  std::printf(
+      "rigid: push (%.9g %.9g %.9g) N, %d nodes touching; moved node by node: push "
+      "(%.9g %.9g %.9g) N; soft ball %.3g m apart, displaced up to %.3g m\n",
+      push.x(), push.y(), push.z(), touching, moved.data().pair_contact_force[0].x(),
+      moved.data().pair_contact_force[0].y(), moved.data().pair_contact_force[0].z(), gap, sag);
+  EXPECT_LT(push.x(), -0.01);  // the rigid ball pushes the soft one back
+  EXPECT_LT(depth, 1e-9);
+  EXPECT_GE(touching, 1);
+  EXPECT_LT((held_by_supports(rigid, 0) + push).norm(), 1e-8);
+  EXPECT_LT((moved.data().pair_contact_force[0] - push).norm(), 1e-8);
+  EXPECT_LT(gap, 1e-6 * sag);
+}
+
+}  // namespace
+}  // namespace phymul
