@@ -216,7 +216,8 @@ double apply_contact_velocities(const Model& model, const Controls& controls,
                                 ContactStep& step) {
   double largest = 0.0;
   if (!model.contact_pairs.empty() && step.pair_contacts)
-    largest = apply_deformable_contact_velocities(model, v, *step.pair_contacts, step.pair_impulse);
+    largest = apply_deformable_contact_velocities(model, v, *step.pair_contacts, step.pair_impulse,
+                                                  step.pair_pushed);
   if (model.obstacles.empty()) return largest;
   each_touching(model, controls, x, load_time, step, [&](int i, const Touch& t) {
     const Vec3 u = v[i] - t.shape_velocity;

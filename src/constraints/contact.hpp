@@ -38,7 +38,8 @@ struct ContactStep {
   // Contact between deformable components (deformable_contact.hpp), when the model has any:
   // the contacts their stages record (Data::pair_contacts).
   std::vector<PairContact>* pair_contacts = nullptr;
-  std::span<Vec3> pair_impulse;  // N s, per contact pair: momentum given to its first component
+  std::span<Vec3> pair_impulse;   // N s, per contact pair: momentum given to its first component
+  std::span<double> pair_pushed;  // Workspace::pair_pushed: the velocity stage's scratch
   std::vector<NeedleState>* needles = nullptr;  // Data::needles, when the model has needles
 };
 

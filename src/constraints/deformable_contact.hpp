@@ -55,11 +55,12 @@ void apply_deformable_contacts(const Model& model, std::span<Vec3> x, Workspace&
                                std::span<Vec3> pair_impulse);
 
 // Velocity stage: removes the approaching normal velocity of each recorded node relative to
-// its triangle, momentum-conserving; adds the first components' m dv to pair_impulse.
-// Returns the largest approach speed it removed (m/s).
+// its triangle, momentum-conserving, by projected Gauss-Seidel sweeps (each record's impulse
+// kept >= 0: pushed, pair_contacts long, holds them); adds the first components' m dv to
+// pair_impulse. Returns the largest relative speed a sweep changed (m/s).
 double apply_deformable_contact_velocities(const Model& model, std::span<Vec3> v,
                                            std::span<PairContact> contacts,
-                                           std::span<Vec3> pair_impulse);
+                                           std::span<Vec3> pair_impulse, std::span<double> pushed);
 
 // Adds to r (N, per node) the contact forces of the last step (impulse / dt on each recorded
 // node, minus it spread on its triangle): what a static residual takes out, as the contact

@@ -83,6 +83,7 @@ void allocate_workspace(const Model& model, Workspace& w) {
     for (int side = 0; side < 2; ++side)
       w.pair_hashes[k][size_t(side)].reserve(model.contact_pairs[k].faces[size_t(side)].size());
   if (!model.contact_pairs.empty()) w.vertex_normal.assign(n, Vec3::Zero());
+  w.pair_pushed.assign(pair_contact_capacity(model), 0.0);
   const Vec3 none = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   w.volumes.resize(model.volumes.size());
   for (size_t k = 0; k < model.volumes.size(); ++k) {

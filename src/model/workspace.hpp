@@ -46,6 +46,8 @@ struct Workspace {
   std::vector<ObstacleContact> contacts;
   std::vector<Vec3> contact_impulse;  // per obstacle, N s, this step
   std::vector<Vec3> pair_impulse;     // per contact pair, N s, this step
+  // Per Data::pair_contacts record: the impulse (N s, >= 0) its velocity stage gave so far.
+  std::vector<double> pair_pushed;
   // The contact pairs' stage: each pair's two surfaces hashed, area-weighted vertex normals.
   std::vector<std::array<TriangleHash, 2>> pair_hashes;
   std::vector<Vec3> vertex_normal;

@@ -79,9 +79,9 @@ ContactStep begin_contact_step(Data& d, double dt) {
   std::fill(d.obstacle_touching.begin(), d.obstacle_touching.end(), -1);
   std::fill(work.contact_impulse.begin(), work.contact_impulse.end(), Vec3::Zero());
   std::fill(work.pair_impulse.begin(), work.pair_impulse.end(), Vec3::Zero());
-  return ContactStep{
-      work.x_start,     d.load_time,       dt,        d.obstacle_touching, work.contact_impulse,
-      &d.pair_contacts, work.pair_impulse, &d.needles};
+  return ContactStep{work.x_start,        d.load_time,          dt,
+                     d.obstacle_touching, work.contact_impulse, &d.pair_contacts,
+                     work.pair_impulse,   work.pair_pushed,     &d.needles};
 }
 
 // Impulse over the step: the position stage's m dx / dt plus the velocity stage's m dv. At
