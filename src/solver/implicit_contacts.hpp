@@ -1,8 +1,8 @@
-// Frictionless obstacles in the implicit step's global solve: each node an obstacle pushes is
-// put on its surface to first order (push . dx = -gap) by the same Schur complement that keeps
-// the volumes, so the iteration's fixed point is the equilibrium with the contact reactions.
-// (Projecting after an unconstrained solve instead has fixed points off equilibrium: P couples
-// a held node to its neighbours.)
+// Obstacles in the implicit step's global solve (their friction: implicit_friction.hpp): each
+// node an obstacle pushes is put on its surface to first order (push . dx = -gap) by the same
+// Schur complement that keeps the volumes, so the iteration's fixed point is the equilibrium with
+// the contact reactions. (Projecting after an unconstrained solve instead has fixed points off
+// equilibrium: P couples a held node to its neighbours.)
 #pragma once
 
 #include <span>
