@@ -166,7 +166,8 @@ std::vector<Parameter> scene_parameters() {
        .kind = Kind::list,
        .default_note = "none",
        .child = "contact",
-       .doc = "Pairs of objects in contact with each other (deformable, or one a driven rigid object)."},
+       .doc = "Pairs of objects in contact with each other (deformable, or one a driven rigid "
+              "object)."},
       {.section = "scene",
        .name = "needles",
        .kind = Kind::list,
@@ -242,8 +243,7 @@ std::vector<Parameter> simulation_parameters() {
               "dt, for elastic shape-memory, active and rigid objects with gravity, forces, "
               "pressures, fixed and prescribed nodes, springs, stitches, doubled nodes, volume "
               "constraints and obstacles, with Coulomb friction or not (see docs/implicit.md). "
-              "Static mode "
-              "relaxes with Verlet pseudo-dynamics unless `solver: implicit`.",
+              "Static mode relaxes with Verlet pseudo-dynamics unless `solver: implicit`.",
        .lands = lands(&SimulationSpec::integrator)},
       {.section = "simulation",
        .name = "implicit_iterations",

@@ -1,6 +1,5 @@
 // What `integrator: implicit` cannot take yet (finite elements, needles; friction in the
-// static solver), found in the scene before compiling: one diagnostic
-// each, at the field.
+// static solver), found in the scene before compiling: one diagnostic each, at the field.
 #include <fmt/format.h>
 
 #include <string>

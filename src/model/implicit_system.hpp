@@ -137,4 +137,20 @@ struct ImplicitSystem {
   ImplicitSystem& operator=(ImplicitSystem&&) = default;
 };
 
+// Node i's value of a field into its free axes' unknowns (added).
+inline void gather_node(const ImplicitSystem& s, int i, const Eigen::Vector3d& value,
+                        std::array<Eigen::VectorXd, 3>& out) {
+  for (int a = 0; a < 3; ++a)
+    if (const int u = s.unknown[size_t(a)][size_t(i)]; u >= 0) out[size_t(a)][u] += value[a];
+}
+
+// A node's value of a field over its unknowns (0 on held axes).
+inline Eigen::Vector3d node_value(const ImplicitSystem& s,
+                                  const std::array<Eigen::VectorXd, 3>& field, int i) {
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();
+  for (int a = 0; a < 3; ++a)
+    if (const int u = s.unknown[size_t(a)][size_t(i)]; u >= 0) v[a] = field[size_t(a)][u];
+  return v;
+}
+
 }  // namespace phymul

@@ -10,24 +10,11 @@
 namespace phymul {
 namespace {
 
-// A node's value over its free axes' unknowns (0 on held axes).
-Vec3 node_value(const ImplicitSystem& s, const std::array<Eigen::VectorXd, 3>& field, int i) {
-  Vec3 v = Vec3::Zero();
-  for (int a = 0; a < 3; ++a)
-    if (const int u = s.unknown[size_t(a)][size_t(i)]; u >= 0) v[a] = field[size_t(a)][u];
-  return v;
-}
-
 // 1 on the axes the solve moves the node along, 0 on held ones.
 Vec3 free_axes(const ImplicitSystem& s, int i) {
   Vec3 f;
   for (int a = 0; a < 3; ++a) f[a] = s.unknown[size_t(a)][size_t(i)] >= 0 ? 1.0 : 0.0;
   return f;
-}
-
-void add_to_residual(ImplicitSystem& s, int i, const Vec3& force) {
-  for (int a = 0; a < 3; ++a)
-    if (const int u = s.unknown[size_t(a)][size_t(i)]; u >= 0) s.residual[size_t(a)][u] += force[a];
 }
 
 // v without its part along the unit n, on the free axes.
@@ -103,7 +90,7 @@ Vec3 add_friction(const Model& model, const Data& d, ImplicitSystem& s, int node
   s.sliding[i] = hold.norm() > bound;
   const Vec3 friction = s.sliding[i] ? Vec3(-bound * hold.normalized()) : Vec3(-hold);
   if (!s.sliding[i]) add_stick_rows(s, node, push, slip, obstacle, normal_row);
-  add_to_residual(s, node, friction);
+  gather_node(s, node, friction, s.residual);
   return friction;
 }
 

@@ -335,13 +335,6 @@ void solve_fields(ImplicitSystem& s, const Fields& io) {
   }
 }
 
-// Node i's value of a field into its free axes' unknowns.
-void gather_node(const ImplicitSystem& s, int i, const Vec3& value,
-                 std::array<Eigen::VectorXd, 3>& out) {
-  for (int a = 0; a < 3; ++a)
-    if (const int u = s.unknown[size_t(a)][size_t(i)]; u >= 0) out[size_t(a)][u] += value[a];
-}
-
 // Sums a node field into the unknowns (a doubled group's members add up); a free rigid body's
 // nodes into the body's (the force on the centre's motion, its moment, in the body's frame, on
 // the turn).
@@ -407,14 +400,6 @@ void find_contacts(const Model& model, Data& d, double load_time) {
     else
       for (int i : o.nodes) add(i);
   }
-}
-
-// A node's value over its unknowns (0 on held axes).
-Vec3 node_value(const ImplicitSystem& s, const std::array<Eigen::VectorXd, 3>& field, int i) {
-  Vec3 v = Vec3::Zero();
-  for (int a = 0; a < 3; ++a)
-    if (const int u = s.unknown[size_t(a)][size_t(i)]; u >= 0) v[a] = field[size_t(a)][u];
-  return v;
 }
 
 // Takes out of the residual the volume constraints' pressures (the least-squares multipliers
