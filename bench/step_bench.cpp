@@ -32,9 +32,9 @@ BENCHMARK(BM_Step)
 // range(1) times the explicit scheme's dt, at most range(2) global solves a step (tolerance
 // 1e-9 N: the cap is what stops them here). The factorisation, in the first step, is not
 // timed. Beside BM_Step/n/1: the same grid, one thread.
-void BM_StepImplicit(benchmark::State& state) {
+void implicit_benchmark(benchmark::State& state, phymul::ElasticModel elasticity) {
   omp_set_num_threads(1);
-  phymul::Model model = phymul::bench::pushed_cube(int(state.range(0)));
+  phymul::Model model = phymul::bench::pushed_cube(int(state.range(0)), elasticity);
   model.settings.integrator = phymul::Integrator::implicit;
   model.settings.implicit_iterations = int(state.range(2));
   model.settings.implicit_tolerance = 1e-9;
@@ -47,6 +47,18 @@ void BM_StepImplicit(benchmark::State& state) {
   state.counters["ns_per_node_explicit_dt"] =
       state.counters["ns_per_node_step"] / double(state.range(1));
 }
+void BM_StepImplicit(benchmark::State& state) {
+  implicit_benchmark(state, phymul::ElasticModel::shape_memory);
+}
+// The same with explicit finite elements (their stiffness in P, refactorised as cells turn):
+// beside BM_StepFem/n/1.
+void BM_StepFemImplicit(benchmark::State& state) {
+  implicit_benchmark(state, phymul::ElasticModel::fem);
+}
+BENCHMARK(BM_StepFemImplicit)
+    ->ArgsProduct({{10, 20}, {10, 100}, {5}})
+    ->ArgNames({"n", "dt_x", "iterations"})
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_StepImplicit)
     ->ArgsProduct({{10, 20}, {10, 100}, {5}})
     ->Args({20, 100, 20})

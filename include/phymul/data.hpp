@@ -131,6 +131,10 @@ struct Data {
   // (v - v at its start) / dt, which the next step's first guess continues.
   std::vector<Vec3> acceleration;
   std::vector<Eigen::Quaterniond> rotation;  // per shape-memory node: last best-fit rotation
+  // Per explicit finite-element cell (the objects' in order), with the implicit integrator or
+  // static solver (else empty): its deformation's rotation where the implicit step's matrix
+  // last took the cells' stiffness, turned with them (identity at first).
+  std::vector<Eigen::Quaterniond> cell_rotation;
   // J: elastic energy at the last force pass (shape memory and explicit finite elements).
   double shape_memory_energy = 0.0;
 

@@ -9,6 +9,7 @@
 
 #include "fem/constitutive.hpp"
 #include "fem/element.hpp"
+#include "forces/shape_memory.hpp"
 #include "model/parallel_plan.hpp"
 
 namespace phymul {
@@ -64,6 +65,15 @@ double cell_forces(const ExplicitFem& fem, int e, std::span<const Vec3> rest,
 }
 
 template <int N>
+void fit_rotations(const ExplicitFem& fem, std::span<const Vec3> rest, std::span<const Vec3> x,
+                   std::span<Eigen::Quaterniond> rotation) {
+  Eigen::Matrix<double, 3, N> U;
+  for (int e = 0; e < int(fem.volume.size()); ++e)
+    extract_rotation(Mat3::Identity() + displacement_gradient<N>(fem, e, rest, x, U),
+                     rotation[size_t(e)]);
+}
+
+template <int N>
 InvertedCell first_inverted(const ExplicitFem& fem, std::span<const Vec3> rest,
                             std::span<const Vec3> x) {
   Eigen::Matrix<double, 3, N> U;
@@ -84,6 +94,12 @@ double add_explicit_fem_forces(const ExplicitFem& fem, std::span<const Vec3> res
     return run_coloured(fem.plan, blocks,
                         [&](int e) { return cell_forces<8>(fem, e, rest, x, f); });
   return run_coloured(fem.plan, blocks, [&](int e) { return cell_forces<4>(fem, e, rest, x, f); });
+}
+
+void fit_cell_rotations(const ExplicitFem& fem, std::span<const Vec3> rest, std::span<const Vec3> x,
+                        std::span<Eigen::Quaterniond> rotation) {
+  if (fem.nodes_per_cell == 8) return fit_rotations<8>(fem, rest, x, rotation);
+  fit_rotations<4>(fem, rest, x, rotation);
 }
 
 InvertedCell first_inverted_cell(const ExplicitFem& fem, std::span<const Vec3> rest,

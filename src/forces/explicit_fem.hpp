@@ -16,6 +16,11 @@ double add_explicit_fem_forces(const ExplicitFem& fem, std::span<const Vec3> res
                                std::span<const Vec3> x, std::span<Vec3> f,
                                std::span<double> blocks);
 
+// Each cell's rotation: that of its deformation gradient at its centre (the rotation R
+// maximising tr(R^T F)), warm started from and written into rotation (one per cell).
+void fit_cell_rotations(const ExplicitFem& fem, std::span<const Vec3> rest, std::span<const Vec3> x,
+                        std::span<Eigen::Quaterniond> rotation);
+
 // The first cell, in order, that is inverted at x (as above; J not finite too).
 struct InvertedCell {
   int cell = -1;  // among fem's cells (a wedge is three); -1: none

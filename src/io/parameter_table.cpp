@@ -240,9 +240,10 @@ std::vector<Parameter> simulation_parameters() {
        .doc = "Time integration scheme. `verlet` and `newton-cotes` are explicit (dt below the "
               "stability limit); `implicit` is backward Euler solved by local/global iterations "
               "(rotations fitted per node, then one prefactorised sparse solve), stable at any "
-              "dt, for elastic shape-memory, active and rigid objects with gravity, forces, "
-              "pressures, fixed and prescribed nodes, springs, stitches, doubled nodes, volume "
-              "constraints and obstacles, with Coulomb friction or not (see docs/implicit.md). "
+              "dt, for elastic shape-memory, finite-element, active and rigid objects with "
+              "gravity, forces, pressures, fixed and prescribed nodes, springs, stitches, doubled "
+              "nodes, volume constraints, contacts and obstacles, with Coulomb friction or not "
+              "(see docs/implicit.md; not needles). "
               "Static mode relaxes with Verlet pseudo-dynamics unless `solver: implicit`.",
        .lands = lands(&SimulationSpec::integrator)},
       {.section = "simulation",

@@ -111,10 +111,10 @@ void update_from(const BlockFactor& f, int first, int end, std::vector<PaddedBlo
 void factorise_numeric(const std::vector<BlockEntry>& a, const std::vector<int>& a_start,
                        BlockFactor& f) {
   const int n = f.blocks;
-  std::vector<int> row_start, row_column;
-  row_lists(f, row_start, row_column);
-  std::vector<int> next(f.start.begin(), f.start.end() - 1);  // per column: its first row >= j
-  std::vector<PaddedBlock> sum(size_t(n), PaddedBlock::Zero());
+  if (f.row_start.empty()) row_lists(f, f.row_start, f.row_column);
+  f.next.assign(f.start.begin(), f.start.end() - 1);  // per column: its first row >= j
+  f.sum.assign(size_t(n), PaddedBlock::Zero());
+  std::vector<PaddedBlock>& sum = f.sum;
   f.value.assign(f.row.size(), PaddedBlock::Zero());
   f.inverse_diagonal.assign(size_t(n), PaddedBlock::Zero());
   f.inverse_transpose.assign(size_t(n), PaddedBlock::Zero());
@@ -124,9 +124,9 @@ void factorise_numeric(const std::vector<BlockEntry>& a, const std::vector<int>&
       sum[size_t(f.row[size_t(e)])].setZero();
     for (int e = a_start[size_t(j)]; e < a_start[size_t(j) + 1]; ++e)
       sum[size_t(a[size_t(e)].row)].topRows<3>() += a[size_t(e)].value;
-    for (int r = row_start[size_t(j)]; r < row_start[size_t(j) + 1]; ++r) {
-      const int k = row_column[size_t(r)];
-      update_from(f, next[size_t(k)]++, f.start[size_t(k) + 1], sum);
+    for (int r = f.row_start[size_t(j)]; r < f.row_start[size_t(j) + 1]; ++r) {
+      const int k = f.row_column[size_t(r)];
+      update_from(f, f.next[size_t(k)]++, f.start[size_t(k) + 1], sum);
     }
     const Eigen::LLT<Block3> diagonal(sum[size_t(j)].topRows<3>());
     if (diagonal.info() != Eigen::Success)
@@ -170,12 +170,33 @@ BlockFactor analyse_blocks(int blocks, const std::vector<std::pair<int, int>>& p
   return f;
 }
 
+BlockAssembly assemble_blocks(const BlockFactor& f, std::vector<BlockEntry> entries) {
+  BlockAssembly a;
+  a.entry = permuted(std::move(entries), f.position);
+  a.start.assign(size_t(f.blocks) + 1, 0);
+  for (const BlockEntry& e : a.entry) ++a.start[size_t(e.col) + 1];
+  for (int j = 0; j < f.blocks; ++j) a.start[size_t(j) + 1] += a.start[size_t(j)];
+  return a;
+}
+
+BlockSlot block_slot(const BlockFactor& f, const BlockAssembly& a, int p, int q) {
+  int r = f.position[size_t(p)], c = f.position[size_t(q)];
+  const bool transposed = r < c;
+  if (transposed) std::swap(r, c);
+  const auto first = a.entry.begin() + a.start[size_t(c)],
+             last = a.entry.begin() + a.start[size_t(c) + 1];
+  const auto at =
+      std::lower_bound(first, last, r, [](const BlockEntry& e, int row) { return e.row < row; });
+  if (at == last || at->row != r) return {};
+  return {int(at - a.entry.begin()), transposed};
+}
+
+void factorise_assembled(BlockFactor& f, const BlockAssembly& a) {
+  factorise_numeric(a.entry, a.start, f);
+}
+
 void factorise_blocks(BlockFactor& f, std::vector<BlockEntry> entries) {
-  const std::vector<BlockEntry> a = permuted(std::move(entries), f.position);
-  std::vector<int> a_start(size_t(f.blocks) + 1, 0);
-  for (const BlockEntry& e : a) ++a_start[size_t(e.col) + 1];
-  for (int j = 0; j < f.blocks; ++j) a_start[size_t(j) + 1] += a_start[size_t(j)];
-  factorise_numeric(a, a_start, f);
+  factorise_assembled(f, assemble_blocks(f, std::move(entries)));
 }
 
 namespace {

@@ -34,6 +34,10 @@ struct BlockFactor {
   std::vector<PaddedBlock> inverse_diagonal, inverse_transpose;
   std::vector<int> start, row;
   std::vector<PaddedBlock> value;
+  // The numeric factorisation's scratch: per row its columns (compressed rows), per column
+  // its next row, the running sums; kept so that factorising again allocates nothing.
+  std::vector<int> row_start, row_column, next;
+  std::vector<PaddedBlock> sum;
   // solve_blocks' right-hand side, a block a four-wide vector: one solve at a time per
   // factor (each implicit workspace has its own factor).
   mutable std::vector<Eigen::Vector4d> rhs;
@@ -52,6 +56,27 @@ BlockFactor analyse_blocks(int blocks, const std::vector<std::pair<int, int>>& p
 // each within the analysed pairs or on the diagonal). Throws std::runtime_error when the
 // matrix is not positive definite.
 void factorise_blocks(BlockFactor& f, std::vector<BlockEntry> entries);
+
+// A matrix's lower entries in a factor's order, merged: by (col, row), duplicates summed;
+// column j's at [start[j], start[j + 1]).
+struct BlockAssembly {
+  std::vector<BlockEntry> entry;
+  std::vector<int> start;
+};
+
+// The lower entries (as factorise_blocks takes them) in f's order.
+BlockAssembly assemble_blocks(const BlockFactor& f, std::vector<BlockEntry> entries);
+
+// Where the matrix's block (p, q) (blocks before the order) sums in a: its index, and whether
+// it is stored transposed (the order put q's row below p's); -1 where a has no such block.
+struct BlockSlot {
+  int index = -1;
+  bool transposed = false;
+};
+BlockSlot block_slot(const BlockFactor& f, const BlockAssembly& a, int p, int q);
+
+// L's values from an assembly in f's order; allocates nothing once f has been factorised.
+void factorise_assembled(BlockFactor& f, const BlockAssembly& a);
 
 // x = A^-1 x in place, x three values a block in the factor's order (block j's at x + 3 j).
 // Allocates nothing; uses f.rhs.

@@ -178,6 +178,13 @@ Data allocate_data(const Model& model) {
   size_t memory_nodes = 0;
   for (const ShapeMemory& m : model.shape_memory) memory_nodes += m.nodes.size();
   d.rotation.assign(memory_nodes, Eigen::Quaterniond::Identity());
+  if (model.settings.integrator == Integrator::implicit ||
+      (model.settings.mode == SolveMode::static_equilibrium &&
+       model.settings.solver == StaticSolver::implicit)) {
+    size_t cells = 0;
+    for (const ExplicitFem& fem : model.explicit_fem) cells += fem.volume.size();
+    d.cell_rotation.assign(cells, Eigen::Quaterniond::Identity());
+  }
   init_bodies(model, d);
   d.contact_force.assign(model.obstacles.size(), Vec3::Zero());
   d.pair_contact_force.assign(model.contact_pairs.size(), Vec3::Zero());

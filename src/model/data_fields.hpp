@@ -69,6 +69,7 @@ struct FieldNames<Data> {
                                           "f",
                                           "acceleration",
                                           "rotation",
+                                          "cell_rotation",
                                           "shape_memory_energy",
                                           "bodies",
                                           "contact_force",

@@ -121,6 +121,26 @@ void plan_explicit_fem(ExplicitFem& fem) {
   });
 }
 
+void explicit_fem_cell_stiffness(const ExplicitFem& fem, int e, const Eigen::Matrix3d& turn,
+                                 std::span<Eigen::Matrix3d> out) {
+  const int n = fem.nodes_per_cell;
+  const double* G = fem.gradient.data() + size_t(e) * n * 3;
+  const double v = fem.volume[size_t(e)], lambda = fem.kappa - 2.0 / 3.0 * fem.mu;
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b) {
+      const Vec3 ga(G[3 * a], G[3 * a + 1], G[3 * a + 2]), gb(G[3 * b], G[3 * b + 1], G[3 * b + 2]);
+      Mat3 k = fem.mu * (ga.dot(gb) * Mat3::Identity() + gb * ga.transpose()) +
+               lambda * ga * gb.transpose();
+      if (n == 8) {
+        const double* g = fem.gamma.data() + size_t(e) * 32;
+        double gg = 0.0;
+        for (int m = 0; m < 4; ++m) gg += g[4 * a + m] * g[4 * b + m];
+        k += fem.hourglass_stiffness[size_t(e)] / v * gg * Mat3::Identity();
+      }
+      out[size_t(a * n + b)] = v * turn * k * turn.transpose();
+    }
+}
+
 void add_explicit_fem_rows(const ExplicitFem& fem, std::span<double> row) {
   // |K_ab| <= (kappa + 4/3 mu) V |grad N_a|_1 |grad N_b|_1 for the material part at rest,
   // plus the hourglass part k |gamma gamma^T|_ab.

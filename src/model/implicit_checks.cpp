@@ -1,5 +1,5 @@
-// What `integrator: implicit` cannot take yet (finite elements, needles; friction in the
-// static solver), found in the scene before compiling: one diagnostic each, at the field.
+// What `integrator: implicit` cannot take yet (needles; friction in the static solver), found in
+// the scene before compiling: one diagnostic each, at the field.
 #include <fmt/format.h>
 
 #include <string>
@@ -23,7 +23,8 @@ std::string implicit_static_at(const SimulationSpec& s) {
 }
 
 constexpr const char* kTakes =
-    "it takes elastic shape-memory, active and rigid objects with gravity, 'force' loads, "
+    "it takes elastic shape-memory, finite-element, active and rigid objects with gravity, 'force' "
+    "loads, "
     "pressures, 'fixed', 'displacement' and 'spring' constraints, stitches, doubled nodes, "
     "volume constraints, obstacles (with friction or not) and contacts; use 'integrator: "
     "verlet'";
@@ -43,13 +44,6 @@ void check_implicit_scene(const Scene& scene, std::vector<Diagnostic>& problems)
   const bool statics = s.mode == SolveMode::static_equilibrium;
   if (statics ? s.solver != StaticSolver::implicit : s.integrator != Integrator::implicit) return;
   const std::string at = statics ? implicit_static_at(s) : implicit_at(s);
-  for (const ObjectSpec& o : scene.objects) {
-    if (o.type != ObjectType::rigid && o.material.model == ElasticModel::fem)
-      problems.push_back({o.material.loc,
-                          fmt::format("object '{}' has 'model: fem', not supported by 'integrator: "
-                                      "implicit'{}: {}",
-                                      o.name, at, kTakes)});
-  }
   // A static equilibrium with friction depends on the path to it, which the static solver's
   // steps (1000 dt from rest) do not follow: there the sticking and sliding nodes cycle.
   for (size_t k = 0; k < scene.obstacles.size() && statics; ++k)

@@ -34,7 +34,19 @@ struct ImplicitSystem {
   std::array<std::shared_ptr<const ImplicitFactor>, 3> factor;
   // Or one factor of the three axes together, by node blocks (solver/implicit_matrix.hpp),
   // where its factor is small enough; per block, each axis's unknown.
-  std::shared_ptr<const BlockFactor> coupled;
+  std::shared_ptr<BlockFactor> coupled;
+  // With explicit finite elements on the coupled factor: P less the cells' stiffness in the
+  // factor's order (zero blocks where only cells couple), P itself, and per block pair of a
+  // cell (solver/implicit_matrix.hpp's each_cell_stiffness order) where it sums (index -1: a
+  // held node's, or above the diagonal), so that P is factorised again for turned cells in
+  // place. Empty: P is assembled anew (the per-axis factors, or cells on a rigid body).
+  struct CellSlot {
+    BlockSlot slot;
+    int row_block = -1, col_block = -1;
+  };
+  BlockAssembly without_cells, assembled;
+  std::vector<CellSlot> cell_slot;
+  std::vector<Eigen::Vector3d> node_scratch;  // a field over the nodes (rest gradients)
   std::vector<std::array<int, 3>> block_unknown;
   std::vector<int> block_of_node;  // -1: every axis held
   // Per rigid body, its unknowns on each axis (free bodies; -1 for driven ones): the motion of
@@ -121,6 +133,8 @@ struct ImplicitSystem {
     int depth = 0, count = 0, newest = -1;
     std::vector<Eigen::Vector3d> x, g, before;  // before: the iterate a solve starts from
   } anderson;
+  // Per explicit finite-element cell: its rotation at the step's start (cells_turned).
+  std::vector<Eigen::Quaterniond> cell_fit;
   // The last step: global solves taken, and the largest residual nodal force (N) at its end.
   int iterations = 0;
   double residual_force = 0.0;

@@ -2,6 +2,8 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <array>
+#include <span>
 #include <utility>
 
 #include "model/neighbourhood.hpp"
@@ -102,6 +104,29 @@ void add_memory_node(const Model& model, const Jacobian& j, double stiffness,
       if (bp >= bq) out.push_back({bp, bq, stiffness * jp.transpose() * jq});
 }
 
+// Adds each explicit finite-element cell's stiffness (each_cell_stiffness): block pairs
+// through over_blocks' maps, at or below the diagonal.
+void add_explicit_fem_cells(const Model& model, const ImplicitBlocks& blocks,
+                            std::span<const Eigen::Quaterniond> cell_rotation,
+                            std::vector<BlockEntry>& out) {
+  Jacobian ta, tb;
+  each_cell_stiffness(model, cell_rotation,
+                      [&](const ExplicitFem& fem, int e, std::span<const Block3> k) {
+                        const int n = fem.nodes_per_cell;
+                        const int* cell = fem.cells.data() + size_t(e * n);
+                        for (int a = 0; a < n; ++a) {
+                          ta = over_blocks(model, blocks, {{cell[a], Block3::Identity()}});
+                          for (int b = 0; b < n; ++b) {
+                            tb = over_blocks(model, blocks, {{cell[b], Block3::Identity()}});
+                            for (const auto& [p, tp] : ta)
+                              for (const auto& [q, tq] : tb)
+                                if (p >= q)
+                                  out.push_back({p, q, tp.transpose() * k[size_t(a * n + b)] * tq});
+                          }
+                        }
+                      });
+}
+
 // The held axes' rows and columns zero, their diagonal one: decoupled unknowns that stay 0.
 void hold_axes(const ImplicitBlocks& blocks, std::vector<BlockEntry>& entries) {
   for (BlockEntry& e : entries)
@@ -199,13 +224,33 @@ std::vector<std::pair<int, int>> coupled_pattern(const Model& model, const Impli
     }
   for (const FibreSegment& f : fibre_segments(model))
     couple({{f.nodes[0], Block3::Identity()}, {f.nodes[1], Block3::Identity()}});
+  for (const ExplicitFem& fem : model.explicit_fem)
+    for (size_t e = 0; e < fem.volume.size(); ++e) {
+      read.clear();
+      for (int a = 0; a < fem.nodes_per_cell; ++a)
+        read.emplace_back(fem.cells[e * size_t(fem.nodes_per_cell) + size_t(a)],
+                          Block3::Identity());
+      couple(read);
+    }
   for (int b = 0; b < int(blocks.of_body.size()); ++b)
     if (blocks.of_body[size_t(b)][0] >= 0)
       pairs.emplace_back(blocks.of_body[size_t(b)][1], blocks.of_body[size_t(b)][0]);
   return pairs;
 }
 
-std::vector<BlockEntry> coupled_matrix(const Model& model, const ImplicitBlocks& blocks, double h) {
+bool cells_on_their_blocks(const Model& model, const ImplicitBlocks& blocks) {
+  for (const ExplicitFem& fem : model.explicit_fem)
+    for (int i : fem.cells) {
+      const int body = model.rigid_body_of.empty() ? -1 : model.rigid_body_of[size_t(i)];
+      if (blocks.of_node[size_t(i)] < 0 && body >= 0 && blocks.of_body[size_t(body)][0] >= 0)
+        return false;
+    }
+  return true;
+}
+
+std::vector<BlockEntry> coupled_matrix(const Model& model, const ImplicitBlocks& blocks, double h,
+                                       std::span<const Eigen::Quaterniond> cell_rotation,
+                                       bool cells) {
   std::vector<BlockEntry> entries;
   const double per_mass = 1.0 / (h * h) + model.damping / h;
   for (int i = 0; i < model.node_count(); ++i)
@@ -232,6 +277,7 @@ std::vector<BlockEntry> coupled_matrix(const Model& model, const ImplicitBlocks&
     add_memory_node(model, {{f.nodes[0], root.matrixU()}, {f.nodes[1], -Block3(root.matrixU())}},
                     1.0, blocks, entries);
   }
+  if (cells) add_explicit_fem_cells(model, blocks, cell_rotation, entries);
   hold_axes(blocks, entries);
   return entries;
 }

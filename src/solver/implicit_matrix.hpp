@@ -9,10 +9,12 @@
 #pragma once
 
 #include <array>
+#include <span>
 #include <utility>
 #include <vector>
 
 #include "model/block_cholesky.hpp"
+#include "model/explicit_fem_cells.hpp"
 #include "model/implicit_system.hpp"
 #include "phymul/model.hpp"
 
@@ -57,11 +59,38 @@ ImplicitBlocks number_blocks(const Model& model, const std::array<std::vector<in
 // The pairs of blocks P couples (each memory node's, every pair of the nodes it reads).
 std::vector<std::pair<int, int>> coupled_pattern(const Model& model, const ImplicitBlocks& blocks);
 
-// P's lower blocks for step h, held axes' rows and columns the identity's. A free rigid body's
+// P's lower blocks for step h, held axes' rows and columns the identity's. The explicit
+// finite-element cells' stiffness at rest is turned by their cell_rotation (Data's; empty: at
+// rest). A free rigid body's
 // node moves by dx = move + R (turn x o) (turn a rotation vector in the body's principal
 // frame, o the node's offset there, R taken at rest): its terms reach the body's blocks
 // through that map, and the body's mass and principal inertia are theirs. In the body's frame
 // the inertia's block is exact at any orientation.
-std::vector<BlockEntry> coupled_matrix(const Model& model, const ImplicitBlocks& blocks, double h);
+// cells: false leaves the finite-element cells out.
+std::vector<BlockEntry> coupled_matrix(const Model& model, const ImplicitBlocks& blocks, double h,
+                                       std::span<const Eigen::Quaterniond> cell_rotation = {},
+                                       bool cells = true);
+
+// Calls visit(fem, e, K) for each explicit finite-element cell, its stiffness at rest turned
+// by its cell_rotation (empty: none), K[a * n + b] = K_ab (model/explicit_fem_cells.hpp).
+template <class Visit>
+void each_cell_stiffness(const Model& model, std::span<const Eigen::Quaterniond> cell_rotation,
+                         Visit visit) {
+  std::array<Block3, 64> k;
+  size_t cell = 0;
+  for (const ExplicitFem& fem : model.explicit_fem) {
+    const int n = fem.nodes_per_cell;
+    for (int e = 0; e < int(fem.volume.size()); ++e, ++cell) {
+      const Block3 turn =
+          cell_rotation.empty() ? Block3::Identity() : cell_rotation[cell].toRotationMatrix();
+      explicit_fem_cell_stiffness(fem, e, turn, std::span(k).first(size_t(n * n)));
+      visit(fem, e, std::span<const Block3>(k).first(size_t(n * n)));
+    }
+  }
+}
+
+// Whether every node of every finite-element cell has its own block or none (held): none on
+// a free rigid body, whose nodes reach P through its blocks.
+bool cells_on_their_blocks(const Model& model, const ImplicitBlocks& blocks);
 
 }  // namespace phymul

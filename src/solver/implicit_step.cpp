@@ -25,6 +25,8 @@
 #include "constraints/contact.hpp"
 #include "constraints/deformable_contact.hpp"
 #include "constraints/doubled.hpp"
+#include "forces/explicit_fem.hpp"
+#include "model/explicit_fem_cells.hpp"
 #include "model/workspace.hpp"
 #include "phymul/forces.hpp"
 #include "solver/implicit_anderson.hpp"
@@ -77,19 +79,20 @@ constexpr size_t kMostCoupledBlocks = size_t(1) << 18;
 // fitted to the current gradients.
 constexpr double kStaleGradient = 0.5;
 
+// A cell turned further than this (rad) from the rotation P took for it refactorises P with
+// every cell's stiffness turned as the cell is now.
+constexpr double kCellTurn = 0.02;
+
 bool has_free_body(const Model& model) {
   return std::any_of(model.rigid_bodies.begin(), model.rigid_bodies.end(),
                      [](const RigidBody& r) { return !r.driven; });
 }
 
 void refuse_unsupported(const Model& model) {
-  const char* what = !model.explicit_fem.empty() ? "explicit finite elements"
-                     : model.volumes.size() > size_t(kMaxVolumes)
-                         ? "more than 16 volume constraints"
-                         : nullptr;
-  if (what)
-    throw std::invalid_argument(std::string("the implicit integrator does not support ") + what +
-                                " yet: use the verlet integrator");
+  if (model.volumes.size() > size_t(kMaxVolumes))
+    throw std::invalid_argument(
+        "the implicit integrator does not support more than 16 volume constraints yet: use the "
+        "verlet integrator");
 }
 
 // Per axis, each node's unknown: one per free node, one per doubled group (unless a member
@@ -123,7 +126,8 @@ void number_unknowns(const Model& model, ImplicitSystem& s) {
 // P = M (1/h^2 + c/h) + sum K A_k^T A_k (+ the springs' k) over one axis's unknowns (lower triangle
 // and diagonal are what the factor reads; both halves are given to the ordering).
 Eigen::SparseMatrix<double> global_matrix(const Model& model, const std::vector<int>& u, int count,
-                                          int axis, double h) {
+                                          int axis, double h,
+                                          std::span<const Eigen::Quaterniond> cell_rotation) {
   std::vector<Eigen::Triplet<double>> entries;
   const double per_mass = 1.0 / (h * h) + model.damping / h;
   for (int i = 0; i < model.node_count(); ++i)
@@ -153,6 +157,16 @@ Eigen::SparseMatrix<double> global_matrix(const Model& model, const std::vector<
     if (q >= 0) entries.emplace_back(q, q, k);
     if (p >= 0 && q >= 0) entries.emplace_back(p, q, -k), entries.emplace_back(q, p, -k);
   }
+  // The finite-element cells' stiffness, this axis's rows and columns of it.
+  each_cell_stiffness(
+      model, cell_rotation, [&](const ExplicitFem& fem, int e, std::span<const Block3> k) {
+        const int n = fem.nodes_per_cell;
+        const int* cell = fem.cells.data() + size_t(e * n);
+        for (int a = 0; a < n; ++a)
+          for (int b = 0; b < n; ++b)
+            if (const int p = u[size_t(cell[a])], q = u[size_t(cell[b])]; p >= 0 && q >= 0)
+              entries.emplace_back(p, q, k[size_t(a * n + b)](axis, axis));
+      });
   Eigen::SparseMatrix<double> P(count, count);
   P.setFromTriplets(entries.begin(), entries.end());
   return P;
@@ -176,30 +190,91 @@ std::shared_ptr<const ImplicitFactor> factorise(const Eigen::SparseMatrix<double
   return f;
 }
 
+// P from its assembly less the cells (ImplicitSystem::without_cells) and the cells' stiffness
+// turned by cell_rotation, factorised in place: allocates nothing.
+void turn_cells(const Model& model, ImplicitSystem& s,
+                std::span<const Eigen::Quaterniond> cell_rotation) {
+  std::copy(s.without_cells.entry.begin(), s.without_cells.entry.end(), s.assembled.entry.begin());
+  size_t k = 0;
+  each_cell_stiffness(model, cell_rotation,
+                      [&](const ExplicitFem& fem, int, std::span<const Block3> stiffness) {
+                        for (const Block3& v : stiffness) {
+                          const ImplicitSystem::CellSlot& c = s.cell_slot[k++];
+                          if (c.slot.index < 0) continue;
+                          Block3 value = v;
+                          for (int a = 0; a < 3; ++a) {
+                            if (s.block_unknown[size_t(c.row_block)][size_t(a)] < 0)
+                              value.row(a).setZero();
+                            if (s.block_unknown[size_t(c.col_block)][size_t(a)] < 0)
+                              value.col(a).setZero();
+                          }
+                          if (c.slot.transposed) value.transposeInPlace();
+                          s.assembled.entry[size_t(c.slot.index)].value += value;
+                        }
+                        (void)fem;
+                      });
+  factorise_assembled(*s.coupled, s.assembled);
+}
+
+// The coupled assembly without the cells and each cell block pair's slot in it (see
+// ImplicitSystem::cell_slot), for the analysed factor f.
+void plan_cells(const Model& model, const ImplicitBlocks& blocks, double h, const BlockFactor& f,
+                ImplicitSystem& s) {
+  std::vector<BlockEntry> entries = coupled_matrix(model, blocks, h, {}, false);
+  s.cell_slot.clear();
+  each_cell_stiffness(model, {}, [&](const ExplicitFem& fem, int e, std::span<const Block3>) {
+    const int n = fem.nodes_per_cell;
+    const int* cell = fem.cells.data() + size_t(e * n);
+    for (int a = 0; a < n; ++a)
+      for (int b = 0; b < n; ++b) {
+        const int p = blocks.of_node[size_t(cell[a])], q = blocks.of_node[size_t(cell[b])];
+        s.cell_slot.push_back({{}, p, q});
+        if (p >= 0 && q >= 0 && p >= q) entries.push_back({p, q, Block3::Zero()});
+      }
+  });
+  s.without_cells = assemble_blocks(f, std::move(entries));
+  s.assembled = s.without_cells;
+  for (ImplicitSystem::CellSlot& c : s.cell_slot)
+    if (c.row_block >= 0 && c.col_block >= 0 && c.row_block >= c.col_block)
+      c.slot = block_slot(f, s.without_cells, c.row_block, c.col_block);
+}
+
 // The three axes' coupled factor (solver/implicit_matrix.hpp) when L holds at most
-// kMostCoupledBlocks blocks; false (nothing set) otherwise.
-bool factorise_coupled(const Model& model, ImplicitSystem& s, double h) {
+// kMostCoupledBlocks blocks; false (nothing set) otherwise. With finite elements whose nodes
+// have their own blocks, planned to be turned in place (turn_cells).
+bool factorise_coupled(const Model& model, ImplicitSystem& s, double h,
+                       std::span<const Eigen::Quaterniond> cell_rotation) {
   const ImplicitBlocks blocks = number_blocks(model, s.unknown, s.body);
   const int count = int(blocks.unknown.size());
   BlockFactor f = analyse_blocks(count, coupled_pattern(model, blocks), kMostCoupledBlocks);
   if (f.row.size() > kMostCoupledBlocks) return false;
-  factorise_blocks(f, coupled_matrix(model, blocks, h));
-  s.coupled = std::make_shared<const BlockFactor>(std::move(f));
   s.block_unknown = blocks.unknown;
   s.block_of_node = blocks.of_node;
+  s.cell_slot.clear();
+  if (!model.explicit_fem.empty() && cells_on_their_blocks(model, blocks)) {
+    plan_cells(model, blocks, h, f, s);
+    s.coupled = std::make_shared<BlockFactor>(std::move(f));
+    turn_cells(model, s, cell_rotation);
+    return true;
+  }
+  factorise_blocks(f, coupled_matrix(model, blocks, h, cell_rotation));
+  s.coupled = std::make_shared<BlockFactor>(std::move(f));
   return true;
 }
 
 // One factor per axis of P with L = sum K A_k^T A_k; axes whose unknowns coincide share it
-// (unless fibres, whose stiffness depends on their direction, make the axes' matrices differ).
-void factorise_axes(const Model& model, ImplicitSystem& s, double h) {
+// (unless fibres or finite elements, whose stiffness depends on the direction, make the axes'
+// matrices differ).
+void factorise_axes(const Model& model, ImplicitSystem& s, double h,
+                    std::span<const Eigen::Quaterniond> cell_rotation) {
   for (int a = 0; a < 3; ++a) {
     s.factor[size_t(a)] = nullptr;
-    for (int b = 0; b < a && !s.factor[size_t(a)] && model.fibres.empty(); ++b)
+    for (int b = 0;
+         b < a && !s.factor[size_t(a)] && model.fibres.empty() && model.explicit_fem.empty(); ++b)
       if (s.unknown[size_t(b)] == s.unknown[size_t(a)]) s.factor[size_t(a)] = s.factor[size_t(b)];
     if (!s.factor[size_t(a)])
-      s.factor[size_t(a)] =
-          factorise(global_matrix(model, s.unknown[size_t(a)], s.unknowns[size_t(a)], a, h));
+      s.factor[size_t(a)] = factorise(
+          global_matrix(model, s.unknown[size_t(a)], s.unknowns[size_t(a)], a, h, cell_rotation));
   }
 }
 
@@ -224,7 +299,8 @@ void solve_rest_gradients(const Model& model, ImplicitSystem& s) {
   const size_t volumes = model.volumes.size();
   s.rest_gradient.resize(volumes);
   s.rest_solved.resize(volumes);
-  std::vector<Vec3> g(size_t(model.node_count()), Vec3::Zero());
+  std::vector<Vec3>& g = s.node_scratch;  // sized by prepare: refactorising allocates nothing
+  std::fill(g.begin(), g.end(), Vec3::Zero());
   for (size_t l = 0; l < volumes; ++l) {
     for (int a = 0; a < 3; ++a) {
       s.rest_gradient[l][size_t(a)].setZero(s.unknowns[size_t(a)]);
@@ -240,18 +316,19 @@ void solve_rest_gradients(const Model& model, ImplicitSystem& s) {
 
 // Numbers the unknowns and factorises P for step h. Allocates: only on a model's first step
 // and when dt changes.
-void prepare(const Model& model, ImplicitSystem& s, double h) {
+void prepare(const Model& model, ImplicitSystem& s, double h,
+             std::span<const Eigen::Quaterniond> cell_rotation) {
   refuse_unsupported(model);
   number_unknowns(model, s);
   s.coupled = nullptr;
   s.block_of_node.clear();
   for (auto& f : s.factor) f = nullptr;
-  if (!factorise_coupled(model, s, h)) {
+  if (!factorise_coupled(model, s, h, cell_rotation)) {
     if (has_free_body(model))
       throw std::invalid_argument(
           "the implicit integrator takes free rigid bodies only where the three axes' factor "
           "fits (at most 2^18 blocks): drive the bodies ('motion') or use the verlet integrator");
-    factorise_axes(model, s, h);
+    factorise_axes(model, s, h, cell_rotation);
   }
   size_t most = 0;
   for (int a = 0; a < 3; ++a) {
@@ -268,11 +345,32 @@ void prepare(const Model& model, ImplicitSystem& s, double h) {
       s.solved_gradient[l][size_t(a)].setZero(s.unknowns[size_t(a)]);
     }
   s.block.assign(std::max(most * 3 * (1 + model.volumes.size()), 3 * s.block_unknown.size()), 0.0);
+  s.cell_fit.resize(cell_rotation.size());
+  s.node_scratch.resize(size_t(model.node_count()));
   if (s.coupled) solve_rest_gradients(model, s);
   prepare_implicit_contacts(model, s);
   prepare_implicit_friction(model, s);
   prepare_anderson(model, s);
   s.h = h;
+}
+
+// P again, for the finite-element cells' new rotations (cells_turned): its factor, the volumes'
+// solves with it at rest, and none of the contacts' columns of P^-1 cached.
+void refactorise(const Model& model, ImplicitSystem& s, double h,
+                 std::span<const Eigen::Quaterniond> cell_rotation) {
+  if (s.coupled) {
+    if (s.cell_slot.empty())
+      factorise_coupled(model, s, h, cell_rotation);
+    else
+      turn_cells(model, s, cell_rotation);
+    solve_rest_gradients(model, s);
+  } else {
+    factorise_axes(model, s, h, cell_rotation);
+  }
+  for (int a = 0; a < 3; ++a) {
+    std::fill(s.column_slot[size_t(a)].begin(), s.column_slot[size_t(a)].end(), -1);
+    s.columns_used[size_t(a)] = 0;
+  }
 }
 
 // P^-1 applied to the fields: with the coupled factor one solve each; with the per-axis
@@ -633,6 +731,26 @@ double next_alpha(double alpha, double residual, double previous, int solves) {
   return alpha;
 }
 
+// Explicit finite elements: each cell's rotation at x, and whether one turned more than
+// kCellTurn from the one P took for it (Data::cell_rotation, which a checkpoint keeps); then
+// they all become P's.
+bool cells_turned(const Model& model, Data& d, ImplicitSystem& s) {
+  if (d.cell_rotation.empty()) return false;
+  std::copy(d.cell_rotation.begin(), d.cell_rotation.end(), s.cell_fit.begin());
+  size_t first = 0;
+  for (const ExplicitFem& fem : model.explicit_fem) {
+    fit_cell_rotations(fem, model.rest_position, d.x,
+                       std::span(s.cell_fit).subspan(first, fem.volume.size()));
+    first += fem.volume.size();
+  }
+  double most = 0.0;
+  for (size_t c = 0; c < s.cell_fit.size(); ++c)
+    most = std::max(most, s.cell_fit[c].angularDistance(d.cell_rotation[c]));
+  if (!(most > kCellTurn)) return false;
+  std::copy(s.cell_fit.begin(), s.cell_fit.end(), d.cell_rotation.begin());
+  return true;
+}
+
 // One backward-Euler step (step_implicit), its first guess continuing `acceleration` (empty:
 // none, as in the static solver's steps from rest), which it then sets to the step's;
 // Anderson-accelerated (implicit_anderson.hpp) where the model allows, unless `statics`.
@@ -645,7 +763,7 @@ void backward_euler_step(const Model& model, Data& d, double h, double load_time
         "the implicit static solver does not support obstacles with friction: use the "
         "relaxation");
   if (!(s.h == h)) {
-    prepare(model, s, h);
+    prepare(model, s, h, d.cell_rotation);
     // Room for a record of every pair row (a checkpoint's or a copy's may hold only its own).
     d.pair_contacts.reserve(s.pair_rows.capacity());
   }
@@ -666,6 +784,7 @@ void backward_euler_step(const Model& model, Data& d, double h, double load_time
     if (s.residual_force > previous) restart_anderson(s);
     alpha = next_alpha(alpha, s.residual_force, previous, s.iterations);
     previous = s.residual_force;
+    if (cells_turned(model, d, s)) refactorise(model, s, h, d.cell_rotation);
     global_step(model, d, s, load_time);
     if (accelerate) {
       // A mix across solves that held different nodes would ignore the change: start anew.

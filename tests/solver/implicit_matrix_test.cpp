@@ -143,5 +143,37 @@ TEST(ImplicitMatrix, IsTheShapeMemorysHessianAtRest) {
   }
 }
 
+// Explicit finite elements (TLED: one-point hexahedra with their hourglass stiffness, and the
+// tetrahedra an ellipsoid's wedges are cut into), nearly incompressible, each held on one
+// side: P less the inertia is -df/dx of their force pass at rest.
+TEST(ImplicitMatrix, IsTheFiniteElementsHessianAtRest) {
+  MaterialSpec fem;
+  fem.model = ElasticModel::fem;
+  fem.young = 20e3;
+  fem.poisson = 0.45;
+  fem.density = 1000.0;
+  Model box;
+  add_elastic_component(
+      box, "box",
+      testing::jittered(make_box(Vec3(0.02, 0.02, 0.02), {3, 3, 3}, CellType::hexa), 0.02 / 3),
+      fem);
+  add_fixed_nodes(box, box.components[0].node_sets.at("top"));
+  finalize(box);
+  Model ball;
+  add_elastic_component(ball, "ball", make_ellipsoid_volume(Vec3(0.02, 0.015, 0.015), 2, 3), fem);
+  add_fixed_nodes(ball, {0});
+  finalize(ball);
+  for (const Model* model : {&box, &ball}) {
+    ASSERT_FALSE(model->explicit_fem.empty());
+    double largest = 0.0;
+    const double mismatch = largest_mismatch(*model, largest);
+    EXPECT_GT(largest, 100.0);  // N/m: E h for h of millimetres, not the inertia
+    EXPECT_LT(mismatch, 1e-6 * largest);
+    std::printf("%d nodes, %d cells of %d nodes: largest entry %.3g N/m, mismatch %.3g\n",
+                model->node_count(), int(model->explicit_fem[0].volume.size()),
+                model->explicit_fem[0].nodes_per_cell, largest, mismatch);
+  }
+}
+
 }  // namespace
 }  // namespace phymul
