@@ -80,8 +80,12 @@ constexpr size_t kMostCoupledBlocks = size_t(1) << 18;
 constexpr double kStaleGradient = 0.5;
 
 // A cell turned further than this (rad) from the rotation P took for it refactorises P with
-// every cell's stiffness turned as the cell is now.
+// every cell's stiffness turned as the cell is now, when the step's last solve shrank the
+// residual by less than kTurnedRatio: a step converging as P's should keeps it. The per-axis
+// factors (which converge slowly anyway, and cost a second or more to refactorise at 20^3)
+// only when the residual grew.
 constexpr double kCellTurn = 0.02;
+constexpr double kTurnedRatio = 0.25;
 
 bool has_free_body(const Model& model) {
   return std::any_of(model.rigid_bodies.begin(), model.rigid_bodies.end(),
@@ -783,8 +787,13 @@ void backward_euler_step(const Model& model, Data& d, double h, double load_time
     if (s.residual_force <= tolerance || s.iterations >= most) break;
     if (s.residual_force > previous) restart_anderson(s);
     alpha = next_alpha(alpha, s.residual_force, previous, s.iterations);
+    const double turned_ratio = s.coupled ? kTurnedRatio : 1.0;
+    if (!(s.residual_force < turned_ratio * previous) && cells_turned(model, d, s)) {
+      refactorise(model, s, h, d.cell_rotation);
+      restart_anderson(s);  // its iterates were P's before
+      alpha = 1.0;
+    }
     previous = s.residual_force;
-    if (cells_turned(model, d, s)) refactorise(model, s, h, d.cell_rotation);
     global_step(model, d, s, load_time);
     if (accelerate) {
       // A mix across solves that held different nodes would ignore the change: start anew.
