@@ -20,7 +20,7 @@ template <int N>
 using Gradient = Eigen::Matrix<double, N, 3>;
 
 template <int N>
-Mat3 displacement_gradient(const ExplicitFem& fem, int e, std::span<const Vec3> rest,
+inline Mat3 displacement_gradient(const ExplicitFem& fem, int e, std::span<const Vec3> rest,
                            std::span<const Vec3> x, Eigen::Matrix<double, 3, N>& U) {
   const int* nodes = fem.cells.data() + size_t(e) * N;
   const Eigen::Map<const Eigen::Matrix<double, N, 3, Eigen::RowMajor>> G(fem.gradient.data() +
@@ -42,9 +42,15 @@ double cell_forces(const ExplicitFem& fem, int e, std::span<const Vec3> rest,
   const Mat3 F = Mat3::Identity() + grad_u;
   const double j_minus_one = ::phymul::fem::det_minus_one(grad_u);
   const double J = 1.0 + j_minus_one;
-  const Mat3 H = F.inverse().transpose();
+  // F^-T = cof(F) / J, the cofactors' columns the cross products of F's.
+  Mat3 H;
+  H.col(0) = F.col(1).cross(F.col(2));
+  H.col(1) = F.col(2).cross(F.col(0));
+  H.col(2) = F.col(0).cross(F.col(1));
+  H /= J;
   const double i1 = F.squaredNorm();
-  const double jm23 = 1.0 / (std::cbrt(J) * std::cbrt(J));
+  const double cube_root = std::cbrt(J);
+  const double jm23 = 1.0 / (cube_root * cube_root);
   const Mat3 P = fem.mu * jm23 * (F - (i1 / 3.0) * H) + fem.kappa * J * j_minus_one * H;
   const double volume = fem.volume[e];
   Eigen::Matrix<double, 3, N> fe = -volume * P * G.transpose();
