@@ -21,7 +21,7 @@ using Gradient = Eigen::Matrix<double, N, 3>;
 
 template <int N>
 inline Mat3 displacement_gradient(const ExplicitFem& fem, int e, std::span<const Vec3> rest,
-                           std::span<const Vec3> x, Eigen::Matrix<double, 3, N>& U) {
+                                  std::span<const Vec3> x, Eigen::Matrix<double, 3, N>& U) {
   const int* nodes = fem.cells.data() + size_t(e) * N;
   const Eigen::Map<const Eigen::Matrix<double, N, 3, Eigen::RowMajor>> G(fem.gradient.data() +
                                                                          size_t(e) * N * 3);
