@@ -16,6 +16,15 @@ double add_explicit_fem_forces(const ExplicitFem& fem, std::span<const Vec3> res
                                std::span<const Vec3> x, std::span<Vec3> f,
                                std::span<double> blocks);
 
+// The pass's two kernels for hexahedra (fem.nodes_per_cell == 8), which it takes in turn:
+// cell e alone (the reference), and cells e to e + 3 at once, lane by lane (the per-cell
+// constants read across the four cells), their forces added cell by cell in order. Each adds
+// into f and returns the energy (summed in cell order), NaN where a cell is inverted.
+double add_hexahedron_forces(const ExplicitFem& fem, int e, std::span<const Vec3> rest,
+                             std::span<const Vec3> x, std::span<Vec3> f);
+double add_four_hexahedra_forces(const ExplicitFem& fem, int e, std::span<const Vec3> rest,
+                                 std::span<const Vec3> x, std::span<Vec3> f);
+
 // Each cell's rotation: that of its deformation gradient at its centre (the rotation R
 // maximising tr(R^T F)), warm started from and written into rotation (one per cell).
 void fit_cell_rotations(const ExplicitFem& fem, std::span<const Vec3> rest, std::span<const Vec3> x,
