@@ -23,11 +23,10 @@ std::string implicit_static_at(const SimulationSpec& s) {
 }
 
 constexpr const char* kTakes =
-    "it takes elastic shape-memory, finite-element, active and rigid objects with gravity, 'force' "
-    "loads, "
-    "pressures, 'fixed', 'displacement' and 'spring' constraints, stitches, doubled nodes, "
-    "volume constraints, obstacles (with friction or not) and contacts; use 'integrator: "
-    "verlet'";
+    "it takes elastic shape-memory, finite-element, active and rigid objects with gravity, "
+    "'force' loads, pressures, 'fixed', 'displacement' and 'spring' constraints, stitches, "
+    "doubled nodes, volume constraints, obstacles (with friction or not) and contacts; use "
+    "'integrator: verlet'";
 
 template <class Spec>
 void refuse_all(const std::vector<Spec>& specs, const char* what, const std::string& at,

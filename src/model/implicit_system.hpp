@@ -133,7 +133,7 @@ struct ImplicitSystem {
     int depth = 0, count = 0, newest = -1;
     std::vector<Eigen::Vector3d> x, g, before;  // before: the iterate a solve starts from
   } anderson;
-  // Per explicit finite-element cell: its rotation at the step's start (cells_turned).
+  // Per explicit finite-element cell: its rotation at the last iterate checked (cells_turned).
   std::vector<Eigen::Quaterniond> cell_fit;
   // The last step: global solves taken, and the largest residual nodal force (N) at its end.
   int iterations = 0;

@@ -109,31 +109,24 @@ void add_memory_node(const Model& model, const Jacobian& j, double stiffness,
 void add_explicit_fem_cells(const Model& model, const ImplicitBlocks& blocks,
                             std::span<const Eigen::Quaterniond> cell_rotation,
                             std::vector<BlockEntry>& out) {
-  Jacobian ta, tb;
-  each_cell_stiffness(model, cell_rotation,
-                      [&](const ExplicitFem& fem, int e, std::span<const Block3> k) {
-                        const int n = fem.nodes_per_cell;
-                        const int* cell = fem.cells.data() + size_t(e * n);
-                        for (int a = 0; a < n; ++a) {
-                          ta = over_blocks(model, blocks, {{cell[a], Block3::Identity()}});
-                          for (int b = 0; b < n; ++b) {
-                            tb = over_blocks(model, blocks, {{cell[b], Block3::Identity()}});
-                            for (const auto& [p, tp] : ta)
-                              for (const auto& [q, tq] : tb)
-                                if (p >= q)
-                                  out.push_back({p, q, tp.transpose() * k[size_t(a * n + b)] * tq});
-                          }
-                        }
-                      });
+  std::array<Jacobian, 8> t;  // per corner, its node's map to the blocks
+  each_cell_stiffness(
+      model, cell_rotation, [&](const ExplicitFem& fem, int e, std::span<const Block3> k) {
+        const int n = fem.nodes_per_cell;
+        const int* cell = fem.cells.data() + size_t(e * n);
+        for (int a = 0; a < n; ++a)
+          t[size_t(a)] = over_blocks(model, blocks, {{cell[a], Block3::Identity()}});
+        for (int a = 0; a < n; ++a)
+          for (int b = 0; b < n; ++b)
+            for (const auto& [p, tp] : t[size_t(a)])
+              for (const auto& [q, tq] : t[size_t(b)])
+                if (p >= q) out.push_back({p, q, tp.transpose() * k[size_t(a * n + b)] * tq});
+      });
 }
 
 // The held axes' rows and columns zero, their diagonal one: decoupled unknowns that stay 0.
 void hold_axes(const ImplicitBlocks& blocks, std::vector<BlockEntry>& entries) {
-  for (BlockEntry& e : entries)
-    for (int a = 0; a < 3; ++a) {
-      if (blocks.unknown[size_t(e.row)][size_t(a)] < 0) e.value.row(a).setZero();
-      if (blocks.unknown[size_t(e.col)][size_t(a)] < 0) e.value.col(a).setZero();
-    }
+  for (BlockEntry& e : entries) hold_block_axes(blocks.unknown, e.row, e.col, e.value);
   for (int b = 0; b < int(blocks.unknown.size()); ++b) {
     Block3 one = Block3::Zero();
     for (int a = 0; a < 3; ++a)

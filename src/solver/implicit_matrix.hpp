@@ -89,6 +89,15 @@ void each_cell_stiffness(const Model& model, std::span<const Eigen::Quaterniond>
   }
 }
 
+// A block's rows (of block `row`) and columns (of block `col`) on held axes (unknown < 0) zero.
+inline void hold_block_axes(const std::vector<std::array<int, 3>>& unknown, int row, int col,
+                            Block3& value) {
+  for (int a = 0; a < 3; ++a) {
+    if (unknown[size_t(row)][size_t(a)] < 0) value.row(a).setZero();
+    if (unknown[size_t(col)][size_t(a)] < 0) value.col(a).setZero();
+  }
+}
+
 // Whether every node of every finite-element cell has its own block or none (held): none on
 // a free rigid body, whose nodes reach P through its blocks.
 bool cells_on_their_blocks(const Model& model, const ImplicitBlocks& blocks);

@@ -201,21 +201,15 @@ void turn_cells(const Model& model, ImplicitSystem& s,
   std::copy(s.without_cells.entry.begin(), s.without_cells.entry.end(), s.assembled.entry.begin());
   size_t k = 0;
   each_cell_stiffness(model, cell_rotation,
-                      [&](const ExplicitFem& fem, int, std::span<const Block3> stiffness) {
+                      [&](const ExplicitFem&, int, std::span<const Block3> stiffness) {
                         for (const Block3& v : stiffness) {
                           const ImplicitSystem::CellSlot& c = s.cell_slot[k++];
                           if (c.slot.index < 0) continue;
                           Block3 value = v;
-                          for (int a = 0; a < 3; ++a) {
-                            if (s.block_unknown[size_t(c.row_block)][size_t(a)] < 0)
-                              value.row(a).setZero();
-                            if (s.block_unknown[size_t(c.col_block)][size_t(a)] < 0)
-                              value.col(a).setZero();
-                          }
+                          hold_block_axes(s.block_unknown, c.row_block, c.col_block, value);
                           if (c.slot.transposed) value.transposeInPlace();
                           s.assembled.entry[size_t(c.slot.index)].value += value;
                         }
-                        (void)fem;
                       });
   factorise_assembled(*s.coupled, s.assembled);
 }
@@ -226,16 +220,18 @@ void plan_cells(const Model& model, const ImplicitBlocks& blocks, double h, cons
                 ImplicitSystem& s) {
   std::vector<BlockEntry> entries = coupled_matrix(model, blocks, h, {}, false);
   s.cell_slot.clear();
-  each_cell_stiffness(model, {}, [&](const ExplicitFem& fem, int e, std::span<const Block3>) {
+  for (const ExplicitFem& fem : model.explicit_fem) {  // each_cell_stiffness's order
     const int n = fem.nodes_per_cell;
-    const int* cell = fem.cells.data() + size_t(e * n);
-    for (int a = 0; a < n; ++a)
-      for (int b = 0; b < n; ++b) {
-        const int p = blocks.of_node[size_t(cell[a])], q = blocks.of_node[size_t(cell[b])];
-        s.cell_slot.push_back({{}, p, q});
-        if (p >= 0 && q >= 0 && p >= q) entries.push_back({p, q, Block3::Zero()});
-      }
-  });
+    for (size_t e = 0; e < fem.volume.size(); ++e) {
+      const int* cell = fem.cells.data() + e * size_t(n);
+      for (int a = 0; a < n; ++a)
+        for (int b = 0; b < n; ++b) {
+          const int p = blocks.of_node[size_t(cell[a])], q = blocks.of_node[size_t(cell[b])];
+          s.cell_slot.push_back({{}, p, q});
+          if (p >= 0 && q >= 0 && p >= q) entries.push_back({p, q, Block3::Zero()});
+        }
+    }
+  }
   s.without_cells = assemble_blocks(f, std::move(entries));
   s.assembled = s.without_cells;
   for (ImplicitSystem::CellSlot& c : s.cell_slot)

@@ -10,17 +10,14 @@
 #include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
 #include "solver/implicit_step.hpp"
+#include "support/examples.hpp"
 #include "support/models.hpp"
 #include "support/process.hpp"
 
 namespace phymul {
 namespace {
 
-double largest_gap(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
-  double gap = 0.0;
-  for (size_t i = 0; i < a.size(); ++i) gap = std::max(gap, (a[i] - b[i]).norm());
-  return gap;
-}
+using testing::largest_gap;
 
 // The muscle example's strip without its bones: 1 x 1 x 4 cm of 300 N/m memories hanging from
 // its fixed top, fibres along its length (600 N/m a segment) fully active, shortening by up
@@ -97,17 +94,8 @@ TEST(ImplicitFibres, StaticsAndLargeStepsFindTheRelaxationsEquilibrium) {
 // solver's equilibrium is the relaxation's; the implicit steps at ten times the example's dt
 // converge at every step of the whole run and end at rest there.
 TEST(ImplicitRigidBodies, MuscleExampleEndsAtTheRelaxationsEquilibrium) {
-  const Scene scene = load_scene(testing::source_dir() / "examples" / "muscle.yaml");
-  auto compiled = [&](SolveMode mode, Integrator integrator, StaticSolver solver) {
-    Scene s = scene;
-    s.simulation.mode = mode;
-    s.simulation.integrator = integrator;
-    s.simulation.solver = solver;
-    s.simulation.tolerance = 1e-10;
-    s.simulation.max_iterations = 2000000;
-    s.simulation.implicit_iterations = 2000;
-    s.simulation.implicit_tolerance = 1e-10;
-    return compile_scene(s);
+  auto compiled = [](SolveMode mode, Integrator integrator, StaticSolver solver) {
+    return testing::compile_example("muscle.yaml", mode, integrator, solver);
   };
   Simulator relaxed(
       compiled(SolveMode::static_equilibrium, Integrator::verlet, StaticSolver::relaxation));

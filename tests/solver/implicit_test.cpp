@@ -21,6 +21,8 @@
 namespace phymul {
 namespace {
 
+using testing::largest_gap;
+
 // The simulator test's hanging cube: 27 g of 5 N/m memories, the top fixed, gravity.
 Model hanging_cube(Integrator integrator) {
   Model model;
@@ -42,12 +44,6 @@ double total_energy(const Model& model, const Data& d) {
   for (int i = 0; i < model.node_count(); ++i)
     e -= model.mass[size_t(i)] * model.gravity.dot(d.x[size_t(i)] - model.rest_position[size_t(i)]);
   return e;
-}
-
-double largest_gap(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
-  double gap = 0.0;
-  for (size_t i = 0; i < a.size(); ++i) gap = std::max(gap, (a[i] - b[i]).norm());
-  return gap;
 }
 
 double largest_displacement(const Model& model, const std::vector<Vec3>& x) {

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "phymul/model.hpp"
 
@@ -16,6 +17,13 @@ template <class Distribution>
 Vec3 random_vec3(Distribution& dist, std::mt19937& rng) {
   const double z = dist(rng), y = dist(rng), x = dist(rng);
   return Vec3(x, y, z);
+}
+
+// The largest distance (m) between the same node in two states.
+inline double largest_gap(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  double gap = 0.0;
+  for (size_t i = 0; i < a.size(); ++i) gap = std::max(gap, (a[i] - b[i]).norm());
+  return gap;
 }
 
 // Scratch of one force pass over a plan: its energy per block.
