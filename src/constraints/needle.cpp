@@ -16,8 +16,8 @@ Vec3 point_inverse_mass(const Model& model, const EmbeddedPoint& p) {
   return w;
 }
 
-// Moves the embedded point by `delta` (m) with the least mass-weighted change of its nodes
-// (each by its weight times its inverse mass); returns the momentum given (N s) over dt.
+}  // namespace
+
 Vec3 move_point(const Model& model, const EmbeddedPoint& p, const Vec3& delta, std::span<Vec3> x,
                 double dt) {
   const Vec3 w = point_inverse_mass(model, p);
@@ -32,6 +32,8 @@ Vec3 move_point(const Model& model, const EmbeddedPoint& p, const Vec3& delta, s
   }
   return impulse;
 }
+
+namespace {
 
 // Inverse mass of the point along the unit direction d.
 double along(const Vec3& w, const Vec3& d) { return w.dot(d.cwiseProduct(d)); }
@@ -48,62 +50,12 @@ struct Stage {
   double axial(const Vec3& p) const { return (p - n.base).dot(n.direction); }
 };
 
-// On the way out, points the tip has passed (their anchor ahead of it on the shaft) let go;
-// a tissue with no point left and no tip in it heals, and may be punctured again.
-void release_track(Stage& g) {
-  if (g.depth < g.s.depth)
-    std::erase_if(g.s.track, [&](const TrackPoint& p) { return p.anchor > 0.0; });
-  g.s.last_point_depth = std::min(g.s.last_point_depth, g.depth);
-  for (size_t t = 0; t < g.s.phase.size(); ++t) {
-    if (g.s.phase[t] != needle_punctured) continue;
-    const bool held = std::any_of(g.s.track.begin(), g.s.track.end(),
-                                  [&](const TrackPoint& p) { return p.tissue == int(t); });
-    if (held) continue;
-    g.s.phase[t] = needle_outside;
-    if (g.s.tip_tissue == int(t)) g.s.tip_tissue = -1;
-  }
-}
-
-// A new track point at the tip, in the tissue it is in; the tip's tissue is updated. One point
-// a tetrahedron: points embedded at different times are not on one line in the cell's own
-// coordinates, and an affine cell cannot put three such points on the shaft, so the newest
-// point of a tetrahedron stands for the track's length in it instead.
-void extend_track(Stage& g) {
-  const double travel = g.depth - g.s.last_point_depth;
-  if (!g.advancing || travel < g.n.spacing) return;
-  g.s.last_point_depth = g.depth;
-  g.s.tip_tissue = -1;
-  for (size_t t = 0; t < g.s.phase.size(); ++t) {
-    if (g.s.phase[t] != needle_punctured) continue;
-    EmbeddedPoint p;
-    if (!embed_point(g.n.tissues[t].tetrahedra, g.x, g.tip(), p)) continue;
-    g.s.tip_tissue = int(t);
-    if (!g.s.track.empty() && g.s.track.back().point.nodes == p.nodes)
-      g.s.track.back().length += travel;
-    else if (g.s.track.size() < g.s.track.capacity())
-      g.s.track.push_back({int(t), p, 0.0, travel});
-    return;
-  }
-}
-
 // Before puncture: the tip holds the surface point it met (a sticking point contact) while
 // it pushes; the surface gives way when that push exceeds the tissue's puncture force.
 void press_or_puncture(Stage& g) {
-  auto pressed = std::find(g.s.phase.begin(), g.s.phase.end(), int(needle_pressed));
-  if (pressed == g.s.phase.end()) {
-    if (!g.advancing) return;
-    for (size_t t = 0; t < g.s.phase.size(); ++t) {
-      if (g.s.phase[t] != needle_outside) continue;
-      EmbeddedPoint p;
-      if (!embed_point(g.n.tissues[t].tetrahedra, g.x, g.tip(), p)) continue;
-      g.s.contact = {int(t), p, 0.0, 0.0};
-      g.s.phase[t] = needle_pressed;
-      pressed = g.s.phase.begin() + std::ptrdiff_t(t);
-      break;
-    }
-    if (pressed == g.s.phase.end()) return;
-  }
-  const int t = int(pressed - g.s.phase.begin());
+  const int t = pressed_tissue(g.n, g.s, g.x, g.depth, g.advancing);
+  if (t < 0) return;
+  auto pressed = g.s.phase.begin() + std::ptrdiff_t(t);
   const Vec3 delta = g.tip() - g.s.contact.point.at(g.x);
   if (delta.dot(g.n.direction) < 0.0) {  // the surface is ahead of the tip: not pressed
     *pressed = needle_outside;
@@ -168,9 +120,9 @@ void settle_on_axis(Stage& g) {
 }
 
 void apply_needle(Stage& g) {
-  release_track(g);
+  release_track(g.s, g.depth);
   press_or_puncture(g);
-  extend_track(g);
+  extend_track(g.n, g.s, g.x, g.depth, g.advancing);
   hold_track(g);
   settle_on_axis(g);
   g.s.depth = g.depth;
@@ -178,6 +130,56 @@ void apply_needle(Stage& g) {
 }
 
 }  // namespace
+
+void release_track(NeedleState& s, double depth) {
+  if (depth < s.depth) std::erase_if(s.track, [&](const TrackPoint& p) { return p.anchor > 0.0; });
+  s.last_point_depth = std::min(s.last_point_depth, depth);
+  for (size_t t = 0; t < s.phase.size(); ++t) {
+    if (s.phase[t] != needle_punctured) continue;
+    const bool held = std::any_of(s.track.begin(), s.track.end(),
+                                  [&](const TrackPoint& p) { return p.tissue == int(t); });
+    if (held) continue;
+    s.phase[t] = needle_outside;
+    if (s.tip_tissue == int(t)) s.tip_tissue = -1;
+  }
+}
+
+// One point a tetrahedron: points embedded at different times are not on one line in the
+// cell's own coordinates, and an affine cell cannot put three such points on the shaft.
+void extend_track(const Needle& n, NeedleState& s, std::span<const Vec3> x, double depth,
+                  bool advancing) {
+  const double travel = depth - s.last_point_depth;
+  if (!advancing || travel < n.spacing) return;
+  s.last_point_depth = depth;
+  s.tip_tissue = -1;
+  for (size_t t = 0; t < s.phase.size(); ++t) {
+    if (s.phase[t] != needle_punctured) continue;
+    EmbeddedPoint p;
+    if (!embed_point(n.tissues[t].tetrahedra, x, needle_tip(n, depth), p)) continue;
+    s.tip_tissue = int(t);
+    if (!s.track.empty() && s.track.back().point.nodes == p.nodes)
+      s.track.back().length += travel;
+    else if (s.track.size() < s.track.capacity())
+      s.track.push_back({int(t), p, 0.0, travel});
+    return;
+  }
+}
+
+int pressed_tissue(const Needle& n, NeedleState& s, std::span<const Vec3> x, double depth,
+                   bool advancing) {
+  const auto pressed = std::find(s.phase.begin(), s.phase.end(), int(needle_pressed));
+  if (pressed != s.phase.end()) return int(pressed - s.phase.begin());
+  if (!advancing) return -1;
+  for (size_t t = 0; t < s.phase.size(); ++t) {
+    if (s.phase[t] != needle_outside) continue;
+    EmbeddedPoint p;
+    if (!embed_point(n.tissues[t].tetrahedra, x, needle_tip(n, depth), p)) continue;
+    s.contact = {int(t), p, 0.0, 0.0};
+    s.phase[t] = needle_pressed;
+    return int(t);
+  }
+  return -1;
+}
 
 void apply_needles(const Model& model, const Controls& controls, std::span<Vec3> x,
                    double load_time, ContactStep& step) {

@@ -242,8 +242,8 @@ std::vector<Parameter> simulation_parameters() {
               "(rotations fitted per node, then one prefactorised sparse solve), stable at any "
               "dt, for elastic shape-memory, finite-element, active and rigid objects with "
               "gravity, forces, pressures, fixed and prescribed nodes, springs, stitches, doubled "
-              "nodes, volume constraints, contacts and obstacles, with Coulomb friction or not "
-              "(see docs/implicit.md; not needles). "
+              "nodes, volume constraints, contacts, obstacles with Coulomb friction or not, and "
+              "needles (see docs/implicit.md). "
               "Static mode relaxes with Verlet pseudo-dynamics unless `solver: implicit`.",
        .lands = lands(&SimulationSpec::integrator)},
       {.section = "simulation",

@@ -1,5 +1,5 @@
-// What `integrator: implicit` cannot take yet (needles; friction in the static solver), found in
-// the scene before compiling: one diagnostic each, at the field.
+// What the implicit static solver cannot take (needles, friction), found in the scene before
+// compiling: one diagnostic each, at the field.
 #include <fmt/format.h>
 
 #include <string>
@@ -25,15 +25,15 @@ std::string implicit_static_at(const SimulationSpec& s) {
 constexpr const char* kTakes =
     "it takes elastic shape-memory, finite-element, active and rigid objects with gravity, "
     "'force' loads, pressures, 'fixed', 'displacement' and 'spring' constraints, stitches, "
-    "doubled nodes, volume constraints, obstacles (with friction or not) and contacts; use "
-    "'integrator: verlet'";
+    "doubled nodes, volume constraints, obstacles and contacts, and in dynamics friction and "
+    "needles; use 'solver: relaxation'";
 
 template <class Spec>
 void refuse_all(const std::vector<Spec>& specs, const char* what, const std::string& at,
                 std::vector<Diagnostic>& problems) {
   for (const Spec& s : specs)
-    problems.push_back({s.loc, fmt::format("{} are not supported by 'integrator: implicit'{}: {}",
-                                           what, at, kTakes)});
+    problems.push_back(
+        {s.loc, fmt::format("{} are not supported by 'solver: implicit'{}: {}", what, at, kTakes)});
 }
 
 }  // namespace
@@ -53,7 +53,8 @@ void check_implicit_scene(const Scene& scene, std::vector<Diagnostic>& problems)
                        "implicit'{}: use 'solver: relaxation' (friction is taken by "
                        "'integrator: implicit' in dynamics)",
                        o.name.empty() ? fmt::format("obstacle{}", k) : o.name, o.friction, at)});
-  refuse_all(scene.needles, "needles", at, problems);
+  // Needles are inserted along a path (a depth schedule), which no static solve follows.
+  if (statics) refuse_all(scene.needles, "needles", at, problems);
 }
 
 }  // namespace phymul

@@ -77,7 +77,10 @@ struct ImplicitSystem {
     int count = 1;
     Eigen::Vector3d push = Eigen::Vector3d::Zero();
     double gap = 0.0;              // m, along push: how far the node is clear of the surface
-    int obstacle = -1, pair = -1;  // whose row (the other -1); side: the node's in the pair
+    int obstacle = -1, pair = -1;  // whose row (the others -1); side: the node's in the pair
+    // A needle's row (solver/implicit_needles.cpp), over an embedded point's four nodes:
+    // `point` its track point, or -1 for the surface point the tip presses. Both ways.
+    int needle = -1, point = -1;
     int side = 0;
     double into = 0.0;  // N: the residual's push along the row (< 0: into the surface)
     // A sticking node's row along a tangent of its obstacle (solver/implicit_friction.cpp):
@@ -126,6 +129,11 @@ struct ImplicitSystem {
   // residual found it sliding; per obstacle, its shape's shift over the step.
   std::vector<char> sliding;
   std::vector<Eigen::Vector3d> obstacle_shift;
+  // Needles (solver/implicit_needles.cpp): per needle and track point, how it moves along the
+  // shaft this step: 0 sticking (an axial row), +1 or -1 sliding that way under its friction;
+  // and whether the last residual changed a needle's state (a puncture, a point let slide).
+  std::vector<std::vector<signed char>> needle_slide;
+  bool needles_changed = false;
   // Anderson acceleration of the iterations (solver/implicit_anderson.cpp): the last few
   // iterates and their images under one iteration, per node, in rings of `depth + 1`
   // (empty: not used for this model); how many the rings hold, and the newest's slot.

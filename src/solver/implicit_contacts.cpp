@@ -6,6 +6,7 @@
 #include <string>
 
 #include "model/block_cholesky.hpp"
+#include "solver/implicit_needles.hpp"
 #include "solver/implicit_pairs.hpp"
 #include "solver/implicit_solve.hpp"
 
@@ -286,7 +287,8 @@ bool release_tensile(ImplicitSystem& s, int volumes) {
     if (!s.held[size_t(c)]) continue;
     const ImplicitSystem::Contact& cc = s.active[size_t(c)];
     // A tangent row (friction) goes with its node's normal row, which comes before it.
-    const bool release = cc.normal_row >= 0
+    const bool release = cc.needle >= 0 ? false  // a needle holds both ways
+                         : cc.normal_row >= 0
                              ? !s.held[size_t(cc.normal_row)]
                              : s.multiplier[size_t(volumes + c)] > 0.0 && cc.into >= 0.0;
     if (release) s.held[size_t(c)] = 0, released = true;
@@ -340,8 +342,8 @@ void prepare_implicit_contacts(const Model& model, ImplicitSystem& s) {
     s.columns[size_t(a)].clear();
     s.columns_used[size_t(a)] = 0;
   }
-  const size_t pair_nodes = pair_node_count(model);
-  if (model.obstacles.empty() && pair_nodes == 0) return;
+  const size_t pair_nodes = pair_node_count(model), needle_rows = needle_row_count(model);
+  if (model.obstacles.empty() && pair_nodes == 0 && needle_rows == 0) return;
   if (s.coupled) {
     prepare_coupled_columns(s);
   } else {
@@ -360,6 +362,8 @@ void prepare_implicit_contacts(const Model& model, ImplicitSystem& s) {
     obstacle_rows += size_t(model.node_count()) * (o.friction > 0.0 ? 3 : 1);
   s.pair_rows.clear();
   if (pair_nodes > 0) prepare_pair_rows(model, s);
+  // The needles' rows are fitted and recorded with the pairs'.
+  if (needle_rows > 0) s.pair_rows.reserve(s.pair_rows.capacity() + needle_rows);
   s.row_capacity = int(std::min(obstacle_rows + s.pair_rows.capacity(), size_t(kMaxContactRows)));
   s.active.reserve(obstacle_rows + s.pair_rows.capacity());
   s.touching_gap.reserve(obstacle_rows);
@@ -374,7 +378,7 @@ void prepare_implicit_contacts(const Model& model, ImplicitSystem& s) {
   s.held.resize(size_t(s.row_capacity));
   s.held_by.assign(size_t(model.node_count()), -1);
   s.pair_held.assign(size_t(model.node_count()), -1);
-  if (pair_nodes == 0) return;
+  if (pair_nodes == 0 && needle_rows == 0) return;
   s.fit.resize(n * n);
   s.fit_rhs.resize(n);
   s.fit_rows.resize(n);
@@ -391,10 +395,10 @@ void constrain_to_contacts(const Model& model, ImplicitSystem& s,
   }
   // A node with several rows (faces at an edge, obstacles) stays held while any one is.
   for (const ImplicitSystem::Contact& cc : s.active)
-    (cc.pair >= 0 ? s.pair_held : s.held_by)[size_t(cc.nodes[0])] = -1;
+    if (cc.needle < 0) (cc.pair >= 0 ? s.pair_held : s.held_by)[size_t(cc.nodes[0])] = -1;
   for (int c = 0; c < contacts; ++c)
     if (const ImplicitSystem::Contact& cc = s.active[size_t(c)];
-        s.held[size_t(c)] && cc.normal_row < 0)
+        s.held[size_t(c)] && cc.normal_row < 0 && cc.needle < 0)
       (cc.pair >= 0 ? s.pair_held : s.held_by)[size_t(cc.nodes[0])] =
           cc.pair >= 0 ? cc.pair : cc.obstacle;
   for (int l = 0; l < volumes; ++l)

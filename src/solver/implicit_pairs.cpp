@@ -169,7 +169,8 @@ void fit_pressures_and_pair_forces(const Model& model, ImplicitSystem& s, const 
       N[r * n + l] = N[l * n + r] = along(s, row, s.gradient[size_t(l)]);
     for (int e = 0; e <= c; ++e)
       N[r * n + volumes + e] = N[(volumes + e) * n + r] = overlap(s, row, s.pair_rows[size_t(e)]);
-    s.held[size_t(c)] = row.gap <= kTouching;  // a row clear of the surface carries nothing
+    // A row clear of the surface carries nothing; a needle's holds both ways.
+    s.held[size_t(c)] = row.needle >= 0 || row.gap <= kTouching;
   }
   // A contact only pushes: rows fitted pulling (a positive coefficient: r along +g) are let
   // go and the rest fitted again, until none pulls.
@@ -177,7 +178,8 @@ void fit_pressures_and_pair_forces(const Model& model, ImplicitSystem& s, const 
     solve_taken(s, volumes, n);
     pulled = false;
     for (int c = 0; c < rows; ++c)
-      if (s.held[size_t(c)] && s.rhs[size_t(volumes + c)] > 0.0)
+      if (s.held[size_t(c)] && s.pair_rows[size_t(c)].needle < 0 &&
+          s.rhs[size_t(volumes + c)] > 0.0)
         s.held[size_t(c)] = 0, pulled = true;
   }
   for (int l = 0; l < volumes; ++l) pressure[l] = s.rhs[size_t(l)];
@@ -199,6 +201,7 @@ void take_out_pair_forces(Data& d, ImplicitSystem& s) {
       for (int a = 0; a < 3; ++a)
         if (const int u = s.unknown[size_t(a)][size_t(row.nodes[size_t(k)])]; u >= 0)
           s.residual[size_t(a)][u] += force * row.weights[size_t(k)] * row.push[a];
+    if (row.needle >= 0) continue;  // its force is the needle's (implicit_needles.cpp)
     d.pair_contact_force[size_t(row.pair)] += (row.side == 0 ? force : -force) * row.push;
     if (d.pair_contacts.size() == d.pair_contacts.capacity())
       throw std::runtime_error("the implicit step records at most " +

@@ -34,6 +34,7 @@
 #include "solver/implicit_contacts.hpp"
 #include "solver/implicit_friction.hpp"
 #include "solver/implicit_matrix.hpp"
+#include "solver/implicit_needles.hpp"
 #include "solver/implicit_pairs.hpp"
 #include "solver/implicit_solve.hpp"
 
@@ -350,6 +351,7 @@ void prepare(const Model& model, ImplicitSystem& s, double h,
   if (s.coupled) solve_rest_gradients(model, s);
   prepare_implicit_contacts(model, s);
   prepare_implicit_friction(model, s);
+  prepare_implicit_needles(model, s);
   prepare_anderson(model, s);
   s.h = h;
 }
@@ -536,7 +538,7 @@ void remove_reactions(const Model& model, Data& d, ImplicitSystem& s) {
   }
   std::fill(d.contact_force.begin(), d.contact_force.end(), Vec3::Zero());
   s.active.clear();
-  if (!model.contact_pairs.empty()) take_out_pair_forces(d, s);
+  if (pairs) take_out_pair_forces(d, s);  // and the needles' rows
   for (size_t k = 0; k < contacts.size(); ++k) {
     const ObstacleContact& c = contacts[k];
     // The solve decides whom it holds.
@@ -638,11 +640,14 @@ double residual_at(const Model& model, Data& d, ImplicitSystem& s, double h, dou
   backward_euler_residual(model, d, h, w.f_start);
   gather(model, d, s, w.f_start, s.residual);
   add_body_inertia(model, d, s, h);
+  if (!model.needles.empty()) add_needle_rows(model, d, s, load_time);
   for (size_t l = 0; l < model.volumes.size(); ++l) {
     volume_gradient(model.volumes[l], d.x, w.f_start);
     gather(s, w.f_start, model.volumes[l].nodes, s.gradient[l]);
   }
-  return largest_residual(model, d, s);
+  const double largest = largest_residual(model, d, s);
+  if (!model.needles.empty()) update_needles(model, d, s, load_time, false);
+  return largest;
 }
 
 // Each node the last step ended touching an obstacle (Data::obstacle_touching, which a
@@ -675,6 +680,7 @@ void project_positions(const Model& model, Data& d, double load_time) {
     std::fill(w.pair_impulse.begin(), w.pair_impulse.end(), Vec3::Zero());
     apply_deformable_contacts(model, d.x, w, d.pair_contacts, d.dt, w.pair_impulse);
   }
+  if (!model.needles.empty()) project_needles(model, d, w.implicit, load_time);
   project_volumes(model, d.controls, w, d.x, load_time, w.f_start);
   project_doubled(model, d.x);
 }
@@ -708,6 +714,7 @@ void first_guess(const Model& model, Data& d, double h, double load_time,
   keep_touching(model, d, load_time);
   if (!model.contact_pairs.empty()) hold_pair_contacts(d, w.implicit);
   start_bodies(model, d, w.implicit, h, load_time);
+  if (!model.needles.empty()) start_needles(model, d, w.implicit, load_time);
   project_positions(model, d, load_time);
 }
 
@@ -758,6 +765,9 @@ void backward_euler_step(const Model& model, Data& d, double h, double load_time
                          double tolerance, std::span<Vec3> acceleration, bool statics) {
   Workspace& w = *d.work;
   ImplicitSystem& s = w.implicit;
+  if (statics && !model.needles.empty())  // see check_implicit_scene
+    throw std::invalid_argument(
+        "the implicit static solver does not support needles: they are inserted in dynamics");
   if (statics && with_friction(model))  // see check_implicit_scene
     throw std::invalid_argument(
         "the implicit static solver does not support obstacles with friction: use the "
@@ -775,11 +785,22 @@ void backward_euler_step(const Model& model, Data& d, double h, double load_time
   // it against 4 without.
   const bool accelerate = !s.anderson.before.empty() && !statics;
   s.iterations = 0;
+  bool needles_moved = false;
   long last_held = -1;
   double alpha = 1.0, previous = std::numeric_limits<double>::infinity();
   for (;;) {
     compute_forces(model, d, load_time);  // the local step: each node's rotation
     s.residual_force = residual_at(model, d, s, h, load_time);
+    if (s.residual_force <= tolerance && !model.needles.empty()) {
+      // Converged with the needles as they stand: now a surface may give way or a point slide
+      // (each once a step), and the step goes on from the same positions if one did.
+      update_needles(model, d, s, load_time, true);
+      needles_moved = needles_moved || s.needles_changed;
+      if (s.needles_changed && s.iterations < most) {
+        restart_anderson(s);
+        continue;
+      }
+    }
     if (s.residual_force <= tolerance || s.iterations >= most) break;
     if (s.residual_force > previous) restart_anderson(s);
     alpha = next_alpha(alpha, s.residual_force, previous, s.iterations);
@@ -809,10 +830,14 @@ void backward_euler_step(const Model& model, Data& d, double h, double load_time
       project_positions(model, d, load_time);
     ++s.iterations;
   }
+  if (!model.needles.empty()) end_needles(model, d, s, load_time);
   d.load_time = load_time;
   for (int i = 0; i < n; ++i) d.v[size_t(i)] = (d.x[size_t(i)] - w.x_start[size_t(i)]) / h;
   end_bodies(model, d, s, h);
-  for (size_t i = 0; i < acceleration.size(); ++i) acceleration[i] = (d.v[i] - w.v_start[i]) / h;
+  // A surface that gave way (or a point that let go) jolts the tissue once: its acceleration
+  // is not the motion's, and continued it would throw the next guess far off.
+  for (size_t i = 0; i < acceleration.size(); ++i)
+    acceleration[i] = needles_moved ? Vec3::Zero() : Vec3((d.v[i] - w.v_start[i]) / h);
 }
 
 }  // namespace

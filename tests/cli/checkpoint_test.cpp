@@ -17,6 +17,7 @@
 #include <string>
 #include <thread>
 
+#include "support/needle_scene.hpp"
 #include "support/process.hpp"
 #include "support/results.hpp"
 
@@ -427,6 +428,27 @@ namespace {
 // Implicit steps on finite elements refactorise P as the cells turn (Data::cell_rotation): the
 // cantilever bending under its weight, stopped after the first refactorisations, resumes to
 // the same bits.
+// A needle in implicit steps stopped after its puncture, with a track sliding and sticking:
+// the needle's state (phases, track, anchors) is all a step starts from.
+TEST(Checkpoint, ImplicitNeedleStepsResumeTheTrack) {
+  TempDir dir;
+  testing::BlockScene block;
+  block.integrator = "integrator: implicit, dt: 2 ms, implicit_tolerance: 1e-9 N";
+  std::string text = block.yaml();
+  text.replace(text.find("duration: 4 s"), 13, "duration: 1.6 s");
+  const fs::path scene = write_scene(dir, text + "output:\n  interval: 0.1 s\n");
+  const fs::path full = dir.path() / "full", part = dir.path() / "part";
+  ASSERT_EQ(phymul(scene.string() + " -o " + full.string()).exit_code, 0);
+  const auto r1 = phymul(scene.string() + " -o " + part.string() + " --stop-after 700");
+  ASSERT_EQ(r1.exit_code, 130) << r1.output;
+  const NeedleState saved = read_checkpoint(part / "checkpoint.bin").data.needles.at(0);
+  EXPECT_EQ(saved.punctures.size(), 1u);
+  EXPECT_GE(saved.track.size(), 2u);
+  const auto r2 = phymul("--resume " + part.string());
+  ASSERT_EQ(r2.exit_code, 0) << r2.output;
+  expect_same_results(full, part);
+}
+
 TEST(Checkpoint, ImplicitFiniteElementsResumeWithTheirTurnedMatrix) {
   TempDir dir;
   const fs::path scene = write_scene(dir, R"(simulation:

@@ -10,46 +10,15 @@
 
 #include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
+#include "support/needle_scene.hpp"
 
 namespace phymul {
 namespace {
 
-// A 4 cm block (8^3 hexahedra, z from -2 to 2 cm), its base held unless `free`; a needle
-// from 5 mm above its top going down at 1 cm/s to `depth` at `until`, then as `later` says.
-struct BlockScene {
-  double puncture = 0.2, friction = 20.0, cutting = 0.0;  // N, N/m, N
-  double damping = 10.0;                                  // 1/s
-  bool free = false;
-  std::string depth = "[{t: 0 s, value: 0 mm}, {t: 3 s, value: 30 mm}]";
-  std::string base = "[0.3 mm, 0.2 mm, 2.5 cm]";
-  std::string direction = "[0, 0, -1]";
-
-  std::string yaml() const {
-    std::string s = "simulation: {dt: auto, duration: 4 s, damping: " + std::to_string(damping) +
-                    " 1/s}\n"
-                    "objects:\n"
-                    "  - name: block\n"
-                    "    mesh: {generator: box, size: [4 cm, 4 cm, 4 cm], cells: [8, 8, 8]}\n"
-                    "    material: {stiffness: 2000 N/m, density: 1000 kg/m^3}\n";
-    if (!free) s += "constraints:\n  - {type: fixed, object: block, nodes: bottom}\n";
-    s += "needles:\n  - name: biopsy\n    base: " + base + "\n    direction: " + direction +
-         "\n    depth: " + depth + "\n    spacing: 1 mm\n    tissues:\n      - {object: block, " +
-         "puncture_force: " + std::to_string(puncture) +
-         " N, friction: " + std::to_string(friction) +
-         " N/m, cutting_force: " + std::to_string(cutting) + " N}\n";
-    return s;
-  }
-  Simulator simulator() const { return Simulator(compile_scene(parse_scene(yaml(), "n.yaml"))); }
-};
-
-const NeedleState& state(const Simulator& sim) { return sim.data().needles[0]; }
-double axial(const Simulator& sim) {
-  return needle_axial_force(sim.model().needles[0], state(sim));
-}
-
-void run_until(Simulator& sim, double t) {
-  while (sim.data().time < t - 1e-12) sim.step();
-}
+using testing::axial;
+using testing::BlockScene;
+using testing::run_until;
+using testing::state;
 
 TEST(Needle, PuncturesWhenThePushReachesThePunctureForce) {
   for (const double puncture : {0.1, 0.2}) {
@@ -76,80 +45,17 @@ TEST(Needle, PuncturesWhenThePushReachesThePunctureForce) {
   }
 }
 
-// Inserted length L after puncture against the axial force. The tissue slides on the shaft,
-// so every track point behind the cut (the newest point's cell, which takes the cutting
-// force, zero here) carries its whole friction, friction x its length: F = friction x
-// (L - the cut's length), the analytic law, within one spacing's share (the cut's length
-// grows a spacing at a time) once the point last out of the cut slides. Never more than
-// friction x L.
+// F = friction x (L - the cut's length) (testing::expect_friction_law).
 TEST(Needle, AxialForceGrowsWithTheInsertedLengthAtTheFrictionPerLength) {
-  BlockScene scene;
-  scene.puncture = 0.05;
-  scene.friction = 5.0;
-  Simulator sim = scene.simulator();
-  while (state(sim).punctures.empty() && sim.data().time < 1.0) sim.step();
-  ASSERT_EQ(state(sim).punctures.size(), 1u);
-  const double entry = state(sim).punctures[0].depth;
-  double n = 0, sl = 0, sf = 0, sll = 0, slf = 0;
-  const double share = scene.friction * 0.001;  // N, one spacing
-  size_t points = 0;
-  double made = 0.0;  // m, depth when the newest point was made
-  while (sim.data().time < 2.5) {
-    sim.step();
-    const double L = state(sim).depth - entry, F = axial(sim);
-    EXPECT_LE(F, scene.friction * L + 1e-12) << "L = " << L;
-    if (state(sim).track.size() != points)
-      points = state(sim).track.size(), made = state(sim).depth;
-    // After the puncture's recoil, and 1 mm after the last point left the cut (it sticks
-    // until the tissue's pull on it reaches its friction).
-    if (L < 0.008 || state(sim).depth - made < 0.001) continue;
-    const double behind = L - state(sim).track.back().length;
-    EXPECT_NEAR(F, scene.friction * behind, share) << "L = " << L;
-    n += 1, sl += behind, sf += F, sll += behind * behind, slf += behind * F;
-  }
-  const double slope = (n * slf - sl * sf) / (n * sll - sl * sl);
-  EXPECT_NEAR(slope, scene.friction, 0.02 * scene.friction);
-  EXPECT_GE(state(sim).track.size(), 3u);
+  testing::expect_friction_law(BlockScene{}, 1e-12);
 }
 
 TEST(Needle, TrackPointsStayOnTheShaft) {
-  BlockScene scene;
-  scene.puncture = 0.05;
-  scene.base = "[3 mm, -2 mm, 2.5 cm]";  // off the block's axis and tilted: lateral loads
-  scene.direction = "[0.2, 0.1, -1]";
-  Simulator sim = scene.simulator();
-  run_until(sim, 2.5);
-  const Needle& n = sim.model().needles[0];
-  ASSERT_GE(state(sim).track.size(), 3u);
-  for (const TrackPoint& p : state(sim).track) {
-    const Vec3 r = p.point.at(sim.data().x) - n.base;
-    EXPECT_LT((r - r.dot(n.direction) * n.direction).norm(), 1e-6);  // 1/500 of the radius
-  }
-  EXPECT_GT(needle_lateral_force(n, state(sim)), 1e-4);  // it did take lateral loads
+  testing::expect_track_on_shaft(BlockScene{}, 1e-6);  // 1/500 of the radius
 }
 
 TEST(Needle, RetractionReleasesTheTrackAndTheTissueRelaxesToRest) {
-  BlockScene scene;
-  scene.puncture = 0.05;
-  scene.depth = "[{t: 0 s, value: 0 mm}, {t: 2 s, value: 20 mm}, {t: 3 s, value: 0 mm}]";
-  Simulator sim = scene.simulator();
-  const Model& m = sim.model();
-  auto largest_displacement = [&] {
-    double d = 0.0;
-    for (int i = 0; i < m.node_count(); ++i)
-      d = std::max(d, (sim.data().x[i] - m.rest_position[i]).norm());
-    return d;
-  };
-  run_until(sim, 2.0);
-  const double inserted = largest_displacement();
-  EXPECT_GE(state(sim).track.size(), 2u);
-  EXPECT_GT(inserted, 1e-3);
-  run_until(sim, 3.0);
-  EXPECT_TRUE(state(sim).track.empty());
-  EXPECT_EQ(state(sim).phase[0], needle_outside);
-  run_until(sim, 5.0);
-  EXPECT_LT(largest_displacement(), 1e-3 * inserted);
-  EXPECT_EQ(axial(sim), 0.0);
+  testing::expect_retraction_to_rest(BlockScene{});
 }
 
 // The force on the needle is minus the momentum it gives the tissue: a free block (no
