@@ -139,15 +139,14 @@ TEST(ImplicitNeedle, TheBiopsyExampleFollowsItsExplicitRun) {
   ASSERT_EQ(state(reference).punctures.size(), 1u);
   EXPECT_NEAR(state(sim).punctures[0].depth, state(reference).punctures[0].depth, 1e-4);
   EXPECT_NEAR(state(sim).punctures[0].force, 1.5, 0.01);
-  // At 3 ms (44 times the explicit limit) the whole run converges, the puncture's jolt
-  // included, and breaks through within two steps' advance (0.18 mm) of the explicit run.
-  // (At 5 ms the step where the five track points start sliding at once stalls at 0.076 N on
-  // a node beside the probe, the obstacle's rows cycling: docs/implicit.md.)
-  scene.simulation.dt = 3e-3;
+  // At 5 ms (73 times the explicit limit) the whole run converges, the puncture's jolt and the
+  // step where five track points start sliding at once included, and breaks through within two
+  // steps' advance (0.3 mm) of the explicit run (measured 0.23 mm).
+  scene.simulation.dt = 5e-3;
   Simulator coarse(compile_scene(scene));
   run_converged(coarse, 2.0, 1e-8);
   ASSERT_EQ(state(coarse).punctures.size(), 1u);
-  EXPECT_NEAR(state(coarse).punctures[0].depth, state(reference).punctures[0].depth, 1.8e-4);
+  EXPECT_NEAR(state(coarse).punctures[0].depth, state(reference).punctures[0].depth, 3e-4);
 }
 
 }  // namespace
