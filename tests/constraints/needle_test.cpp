@@ -88,43 +88,7 @@ TEST(Needle, TheForceOnTheNeedleIsMinusTheForceOnTheTissue) {
 // with its own puncture force. The needle presses and punctures the upper one, crosses it,
 // then presses and punctures the lower one at its force.
 TEST(Needle, CrossesTwoTissuesInTurnEachAtItsOwnPunctureForce) {
-  std::string yaml = "simulation: {dt: auto, duration: 3 s, damping: 10 1/s}\nobjects:\n";
-  for (const char* slab : {"upper: 11", "lower: -10"}) {
-    const std::string s = slab, name = s.substr(0, 5), z = s.substr(7);
-    yaml += "  - name: " + name +
-            "\n    mesh: {generator: box, size: [4 cm, 4 cm, 2 cm], cells: [8, 8, 4], center: "
-            "[0, 0, " +
-            z + " mm]}\n    material: {stiffness: 2000 N/m, density: 1000 kg/m^3}\n";
-  }
-  yaml += "constraints:\n";
-  for (const char* name : {"upper", "lower"})
-    for (const char* x : {"[-3 cm, -3 cm, -3 cm], max: [-1.9 cm, 3 cm, 3 cm]",
-                          "[1.9 cm, -3 cm, -3 cm], max: [3 cm, 3 cm, 3 cm]"})
-      yaml +=
-          std::string("  - {type: fixed, object: ") + name + ", nodes: {box: {min: " + x + "}}}\n";
-  yaml +=
-      "needles:\n  - base: [0.3 mm, 0.2 mm, 26 mm]\n    direction: [0, 0, -1]\n"
-      "    depth: [{t: 0 s, value: 0 mm}, {t: 3 s, value: 45 mm}]\n    tissues:\n"
-      "      - {object: upper, puncture_force: 0.1 N, friction: 5 N/m}\n"
-      "      - {object: lower, puncture_force: 0.3 N, friction: 5 N/m}\n";
-  Simulator sim(compile_scene(parse_scene(yaml, "two.yaml")));
-  run_until(sim, 3.0);
-  const std::vector<PunctureEvent>& events = state(sim).punctures;
-  ASSERT_EQ(events.size(), 2u);
-  EXPECT_EQ(events[0].tissue, 0);
-  EXPECT_EQ(events[1].tissue, 1);
-  EXPECT_GT(events[0].force, 0.1);
-  EXPECT_LT(events[0].force, 0.1 * 1.02);
-  EXPECT_GT(events[1].force, 0.3);
-  EXPECT_LT(events[1].force, 0.3 * 1.02);
-  // The lower slab's surface is 26 mm down: met after the upper slab was crossed.
-  EXPECT_GT(events[1].depth, 0.026);
-  EXPECT_EQ(state(sim).phase[0], needle_punctured);
-  EXPECT_EQ(state(sim).phase[1], needle_punctured);
-  int in_upper = 0, in_lower = 0;
-  for (const TrackPoint& p : state(sim).track) (p.tissue == 0 ? in_upper : in_lower) += 1;
-  EXPECT_GE(in_upper, 2);
-  EXPECT_GE(in_lower, 1);
+  testing::expect_two_tissues_crossed("dt: auto", 1.02);
 }
 
 }  // namespace

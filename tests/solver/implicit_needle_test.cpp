@@ -91,6 +91,14 @@ TEST(ImplicitNeedle, RetractionReleasesTheTrackAndTheTissueRelaxesToRest) {
   testing::expect_retraction_to_rest(implicit_block());
 }
 
+// Pressing the lower slab while the upper one's track holds (press and track rows together).
+// The surface gives way at the end of the step whose push crossed its force: here up to 15 %
+// above it, one 2 ms step's rise (30 um of advance against the slab held 2 cm away: 11 mN
+// measured on the upper one).
+TEST(ImplicitNeedle, CrossesTwoTissuesInTurnEachAtItsOwnPunctureForce) {
+  testing::expect_two_tissues_crossed(kImplicit, 1.15);
+}
+
 // Backward Euler's momentum balance: with no support, damping or gravity the block's momentum
 // changes by h times the needle's force on it each step (the shape memory and the volume sum
 // to zero), to the residual left, 1e-9 N a node.
