@@ -102,6 +102,7 @@ struct ImplicitSystem {
   std::vector<std::array<FaceRing, 2>> face_rings;
   std::vector<double> fit, fit_rhs, pair_force;
   std::vector<int> fit_rows;
+  std::vector<char> touching;  // per pair row: whether it may carry a force in the fit
   // Per node, the contact pair whose row the step's last solve held (-1: none), as held_by.
   std::vector<int> pair_held;
   // Columns of P^-1 at those nodes' unknowns, kept while the factor is: per axis owning a

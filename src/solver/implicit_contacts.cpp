@@ -383,6 +383,7 @@ void prepare_implicit_contacts(const Model& model, ImplicitSystem& s) {
   s.fit_rhs.resize(n);
   s.fit_rows.resize(n);
   s.pair_force.resize(s.pair_rows.capacity());
+  s.touching.resize(s.pair_rows.capacity());
 }
 
 void constrain_to_contacts(const Model& model, ImplicitSystem& s,
