@@ -28,7 +28,7 @@ test: build
 # The suite under AddressSanitizer and UndefinedBehaviorSanitizer, assertions on (a separate
 # build, with clang: it compiles a sanitized file five times faster than GCC). The same tree
 # holds the fuzz targets (make fuzz-build), so that CI compiles the library once.
-# SANITIZE_TESTS picks the tests by ctest arguments (CI: -LE 'study|long', all but the studies and the longest resumes).
+# SANITIZE_TESTS picks the tests by ctest arguments (CI: -LE 'study|long', all but the studies and the longest tests).
 SANITIZE_TESTS ?=
 ASAN_DIR = $(BUILD)-asan
 
