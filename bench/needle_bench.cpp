@@ -7,12 +7,9 @@
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
-#include <algorithm>
-#include <chrono>
-
+#include "implicit_runs.hpp"
 #include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
-#include "solver/implicit_step.hpp"
 #include "thread_cpu_time.hpp"
 
 namespace {
@@ -34,29 +31,11 @@ void BM_BiopsyImplicit(benchmark::State& state) {
   Scene scene = load_scene(PHYMUL_SOURCE_DIR "/examples/prostate/biopsy.yaml");
   scene.simulation.integrator = Integrator::implicit;
   scene.simulation.dt = double(state.range(0)) * 1e-3;
-  const Model model = compile_scene(scene);
-  double seconds = 0.0, cpu = 0.0, steps = 0.0, solves = 0.0, worst = 0.0, punctures = 0.0;
-  for (auto _ : state) {
-    Simulator sim(model);
-    const auto start = std::chrono::steady_clock::now();
-    const double cpu_start = thread_cpu_seconds();
-    while (sim.data().time < scene.simulation.duration - 1e-12) {
-      sim.step();
-      steps += 1.0;
-      solves += implicit_iterations(sim.data());
-      worst = std::max(worst, implicit_residual_force(sim.data()));
-    }
-    cpu += thread_cpu_seconds() - cpu_start;
-    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    punctures = double(sim.data().needles[0].punctures.size());
-  }
-  const double dt = *scene.simulation.dt;
-  state.counters["ns_per_node_step"] = seconds * 1e9 / (model.node_count() * steps);
-  state.counters["solves_per_step"] = solves / steps;
-  state.counters["worst_residual_N"] = worst;
+  double punctures = 0.0;
+  time_implicit_runs(
+      state, compile_scene(scene), scene.simulation.duration,
+      [&](const Simulator& sim) { punctures = double(sim.data().needles[0].punctures.size()); });
   state.counters["punctures"] = punctures;
-  state.counters["real_time_factor"] = dt * steps / seconds;
-  state.counters["cpu_real_time_factor"] = dt * steps / cpu;
 }
 BENCHMARK(BM_BiopsyImplicit)
     ->Arg(2)

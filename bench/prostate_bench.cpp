@@ -9,10 +9,10 @@
 #include <algorithm>
 #include <chrono>
 
+#include "implicit_runs.hpp"
 #include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"
 #include "phymul/studies/prostate.hpp"
-#include "solver/implicit_step.hpp"
 #include "thread_cpu_time.hpp"
 
 namespace {
@@ -62,29 +62,7 @@ void BM_ProstateImplicit(benchmark::State& state) {
     state.SkipWithError(e.what());
     return;
   }
-  double seconds = 0.0, cpu = 0.0, steps = 0.0, solves = 0.0, worst = 0.0, dt = 0.0;
-  for (auto _ : state) {
-    Simulator sim(model);
-    const auto start = std::chrono::steady_clock::now();
-    const double cpu_start = thread_cpu_seconds();
-    while (sim.data().time < scene.duration) {
-      sim.step();
-      steps += 1.0;
-      solves += implicit_iterations(sim.data());
-      worst = std::max(worst, implicit_residual_force(sim.data()));
-    }
-    cpu += thread_cpu_seconds() - cpu_start;
-    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    dt = sim.dt();
-  }
-  const double nodes = model.node_count();
-  state.counters["nodes"] = nodes;
-  state.counters["ns_per_node_step"] = seconds * 1e9 / (nodes * steps);
-  state.counters["dt_us"] = dt * 1e6;
-  state.counters["solves_per_step"] = solves / steps;
-  state.counters["worst_residual_N"] = worst;
-  state.counters["real_time_factor"] = dt * steps / seconds;
-  state.counters["cpu_real_time_factor"] = dt * steps / cpu;
+  time_implicit_runs(state, model, scene.duration, [](const Simulator&) {});
 }
 BENCHMARK(BM_ProstateImplicit)
     ->ArgsProduct({{50, 400}, {5, 20}, {0, 1}})

@@ -167,6 +167,12 @@ inline void gather_node(const ImplicitSystem& s, int i, const Eigen::Vector3d& v
     if (const int u = s.unknown[size_t(a)][size_t(i)]; u >= 0) out[size_t(a)][u] += value[a];
 }
 
+// Whether node i has an unknown on any axis (the solve moves it).
+inline bool moves(const ImplicitSystem& s, int i) {
+  return s.unknown[0][size_t(i)] >= 0 || s.unknown[1][size_t(i)] >= 0 ||
+         s.unknown[2][size_t(i)] >= 0;
+}
+
 // A node's value of a field over its unknowns (0 on held axes).
 inline Eigen::Vector3d node_value(const ImplicitSystem& s,
                                   const std::array<Eigen::VectorXd, 3>& field, int i) {

@@ -30,11 +30,6 @@ std::array<Vec3, 2> across(const Vec3& direction) {
   return {first, direction.cross(first)};
 }
 
-bool moves(const ImplicitSystem& s, int i) {
-  return s.unknown[0][size_t(i)] >= 0 || s.unknown[1][size_t(i)] >= 0 ||
-         s.unknown[2][size_t(i)] >= 0;
-}
-
 // The row push . (sum of w_k dx_k) = -gap over the point's nodes, unless none moves.
 void add_row(ImplicitSystem& s, int needle, int point, const EmbeddedPoint& p, const Vec3& push,
              double gap) {

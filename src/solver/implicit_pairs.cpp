@@ -20,11 +20,6 @@ constexpr double kTouching = 1e-9;
 // neck's four rows cycled through three sets (0.19, 0.23, 0.003 N) for ever.
 constexpr double kCarrying = 1e-6;
 
-bool moves(const ImplicitSystem& s, int i) {
-  return s.unknown[0][size_t(i)] >= 0 || s.unknown[1][size_t(i)] >= 0 ||
-         s.unknown[2][size_t(i)] >= 0;
-}
-
 // g_c . g_d: the rows' shared unknowns (a node, or doubled nodes sharing one).
 double overlap(const ImplicitSystem& s, const ImplicitSystem::Contact& c,
                const ImplicitSystem::Contact& d) {

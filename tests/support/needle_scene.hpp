@@ -186,4 +186,30 @@ inline void expect_two_tissues_crossed(const std::string& simulation, double abo
   EXPECT_GE(in_lower, 1);
 }
 
+// The force on the needle is minus the momentum it gives the tissue: a free block (no
+// support, no damping, no gravity) gains the needle's impulses step by step, to within
+// `within(scale, step)` N s (scale: the impulses' sizes summed so far; step: the step count).
+template <class Within>
+void expect_momentum_is_the_needles_impulse(BlockScene scene, Within within) {
+  scene.free = true;
+  scene.damping = 0.0;
+  scene.puncture = 0.0;  // through at once: the free block would ride on the tip
+  scene.cutting = 0.01;
+  Simulator sim = scene.simulator();
+  const Model& m = sim.model();
+  Vec3 impulse = Vec3::Zero();
+  double scale = 0.0;
+  while (sim.data().time < 1.5) {
+    scene.step(sim);
+    impulse -= state(sim).force * sim.data().dt;
+    scale += state(sim).force.norm() * sim.data().dt;
+    Vec3 momentum = Vec3::Zero();
+    for (int i = 0; i < m.node_count(); ++i) momentum += m.mass[i] * sim.data().v[i];
+    ASSERT_LT((momentum - impulse).norm(), within(scale, double(sim.data().step)))
+        << sim.data().time;
+  }
+  EXPECT_EQ(state(sim).punctures.size(), 1u);
+  EXPECT_GT(scale, 1e-3);
+}
+
 }  // namespace phymul::testing
