@@ -77,6 +77,21 @@ struct StaticProgress {
   long fire_downhill = 0;         // FIRE: steps since its last restart
 };
 
+// The implicit steps' Anderson history (solver/implicit_anderson.hpp), carried from one step
+// to the next without friction: the differences of the fixed-point residuals (df) and of the
+// images (dg) between consecutive iterations, `count` columns of a value per node in a ring
+// whose newest is at `newest`, and df's dot products (gram, column by column). It holds for
+// the step h, share alpha and held set `held` (a signature) it was taken with, and is dropped
+// under others. Empty where the acceleration does not apply.
+struct AndersonHistory {
+  double h = 0.0;              // s
+  double alpha = 1.0;          // the share of its corrections the iterations took
+  long held = -1;              // which nodes the solves held on obstacles; -1: none yet
+  int count = 0, newest = -1;  // columns held, the newest's place
+  std::vector<Vec3> df, dg;    // column k's node i at k n + i
+  std::vector<double> gram;    // df_j . df_k at j depth + k
+};
+
 // Buffers a step works in and caches keyed on the positions they were computed at: sized
 // from the model when the Data is made, so that a step allocates nothing, and never read
 // across steps but through their keys (a fresh one gives the same results). Internal.
@@ -152,6 +167,7 @@ struct Data {
   // much is reserved: a step allocates nothing).
   std::vector<PairContact> pair_contacts;
   std::vector<NeedleState> needles;  // per Model::needles
+  AndersonHistory anderson;          // with the implicit integrator
 
   double dt = 0.0;         // s, the explicit step
   double stable_dt = 0.0;  // s, the stability estimate `dt: auto` takes its share of

@@ -15,6 +15,9 @@ void apply_prescribed(const Model& model, std::span<Vec3> x, double load_time);
 // Volume gradient dV/dx_i (m^2) of a closed surface, accumulated into grad (zeroed first on
 // the constraint's nodes).
 void volume_gradient(const VolumeConstraint& c, std::span<const Vec3> x, std::span<Vec3> grad);
+// The same from the gradient the last projection kept (cache) where it was taken at x.
+void volume_gradient(const VolumeConstraint& c, const VolumeCache& cache, std::span<const Vec3> x,
+                     std::span<Vec3> grad);
 
 // Moves the surface nodes along w_i dV/dx_i (w = per-axis inverse mass, 0 on held axes) by
 // the root of the cubic V(x + lambda d) = target (m^3) nearest to 0. Returns lambda; throws

@@ -129,6 +129,12 @@ void volume_gradient(const VolumeConstraint& c, std::span<const Vec3> x, std::sp
   });
 }
 
+void volume_gradient(const VolumeConstraint& c, const VolumeCache& cache, std::span<const Vec3> x,
+                     std::span<Vec3> grad) {
+  if (!gradient_kept_at(c, cache, x)) return volume_gradient(c, x, grad);
+  for (size_t k = 0; k < c.nodes.size(); ++k) grad[size_t(c.nodes[k])] = cache.gradient[k] / 6.0;
+}
+
 namespace {
 
 // The move along the direction d in grad (on c's nodes) that puts V at target: the root of

@@ -19,7 +19,7 @@ namespace {
 // Integers are 64-bit and doubles their IEEE bits, in this machine's byte order (the mark
 // refuses a file from a machine of the other order).
 constexpr char kMagic[8] = {'P', 'H', 'Y', 'M', 'U', 'L', 'C', 'K'};
-constexpr std::uint64_t kVersion = 6;
+constexpr std::uint64_t kVersion = 7;
 constexpr std::uint64_t kByteOrderMark = 0x0102030405060708ULL;
 constexpr std::size_t kHeaderBytes = sizeof kMagic + 3 * sizeof(std::uint64_t);
 

@@ -130,6 +130,20 @@ void compare_shape(const T& made, const T& got, const std::string& path, std::st
       if constexpr (fields::is_vector<M>)
         compare_shape(a, b, path + "." + std::string(name), mismatch);
     });
+  } else if constexpr (std::is_same_v<T, AndersonHistory>) {
+    fields::for_each_pair(made, got, [&](std::string_view name, const auto& a, const auto& b) {
+      using M = std::remove_cvref_t<decltype(a)>;
+      if constexpr (fields::is_vector<M>)
+        compare_shape(a, b, path + "." + std::string(name), mismatch);
+    });
+    // The ring's place and fill within its columns (kAndersonDepth where it is kept).
+    const int depth = made.gram.empty() ? 0 : kAndersonDepth;
+    if (mismatch.empty() && (got.count < 0 || got.count > depth))
+      mismatch = fmt::format("'{}.count' is {}, expected 0 to {}", path, got.count, depth);
+    else if (mismatch.empty() &&
+             (got.newest < -1 || got.newest >= depth || (got.count > 0) != (got.newest >= 0)))
+      mismatch = fmt::format("'{}.newest' is {}, expected {}", path, got.newest,
+                             got.count > 0 ? fmt::format("0 to {}", depth - 1) : "-1");
   } else if constexpr (std::is_same_v<T, Controls>) {
     fields::for_each_pair(made, got, [&](std::string_view name, const auto& a, const auto& b) {
       if (name == "applied_force") return;  // checked with Data's node count below
@@ -168,6 +182,11 @@ size_t pair_contact_capacity(const Model& model) {
   return nodes * size_t(kPairContactSweeps);
 }
 
+bool anderson_applies(const Model& model) {
+  return model.settings.integrator == Integrator::implicit && model.contact_pairs.empty() &&
+         model.rigid_bodies.empty();
+}
+
 Data allocate_data(const Model& model) {
   Data d;
   const size_t n = model.rest_position.size();
@@ -175,6 +194,11 @@ Data allocate_data(const Model& model) {
   d.v.assign(n, Vec3::Zero());
   d.f.assign(n, Vec3::Zero());
   if (model.settings.integrator == Integrator::implicit) d.acceleration.assign(n, Vec3::Zero());
+  if (anderson_applies(model)) {
+    d.anderson.df.assign(size_t(kAndersonDepth) * n, Vec3::Zero());
+    d.anderson.dg.assign(size_t(kAndersonDepth) * n, Vec3::Zero());
+    d.anderson.gram.assign(size_t(kAndersonDepth * kAndersonDepth), 0.0);
+  }
   size_t memory_nodes = 0;
   for (const ShapeMemory& m : model.shape_memory) memory_nodes += m.nodes.size();
   d.rotation.assign(memory_nodes, Eigen::Quaterniond::Identity());

@@ -43,6 +43,12 @@ struct FieldNames<NeedleState> {
 };
 
 template <>
+struct FieldNames<AndersonHistory> {
+  static constexpr const char* names[] = {"h",      "alpha", "held", "count",
+                                          "newest", "df",    "dg",   "gram"};
+};
+
+template <>
 struct FieldNames<StaticProgress> {
   static constexpr const char* names[] = {"load_step",        "iterations", "step_iterations",
                                           "previous_kinetic", "fire_alpha", "fire_downhill"};
@@ -77,6 +83,7 @@ struct FieldNames<Data> {
                                           "obstacle_touching",
                                           "pair_contacts",
                                           "needles",
+                                          "anderson",
                                           "dt",
                                           "stable_dt",
                                           "load_time",

@@ -17,6 +17,14 @@
 
 namespace phymul {
 
+struct Model;
+
+// Columns the implicit steps' Anderson acceleration keeps (Data::anderson).
+inline constexpr int kAndersonDepth = 5;
+// Whether it applies to the model's implicit steps: contact pairs and rigid bodies change
+// the rows or unknowns from one iteration to the next in ways a mix across them would ignore.
+bool anderson_applies(const Model& model);
+
 // L L^T of one axis's matrix P, symmetrically permuted by a fill-reducing order beforehand
 // (the factor itself in natural order, so that a solve permutes into a kept buffer and never
 // allocates).
@@ -135,12 +143,13 @@ struct ImplicitSystem {
   // and whether the last residual changed a needle's state (a puncture, a point let slide).
   std::vector<std::vector<signed char>> needle_slide;
   bool needles_changed = false;
-  // Anderson acceleration of the iterations (solver/implicit_anderson.cpp): the last few
-  // iterates and their images under one iteration, per node, in rings of `depth + 1`
-  // (empty: not used for this model); how many the rings hold, and the newest's slot.
+  // Anderson acceleration of the iterations (solver/implicit_anderson.cpp), its history in
+  // Data::anderson: the iterate the solve started from, and the last iteration's residual f
+  // and image g, per node (empty: not used for this model); whether f and g are this step's,
+  // and whether the history goes on into the next step.
   struct Anderson {
-    int depth = 0, count = 0, newest = -1;
-    std::vector<Eigen::Vector3d> x, g, before;  // before: the iterate a solve starts from
+    std::vector<Eigen::Vector3d> before, f, g;
+    bool has_last = false, carry = false;
   } anderson;
   // Per explicit finite-element cell: its rotation at the last iterate checked (cells_turned).
   std::vector<Eigen::Quaterniond> cell_fit;

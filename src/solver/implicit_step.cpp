@@ -357,7 +357,6 @@ void prepare(const Model& model, ImplicitSystem& s, double h,
   prepare_implicit_contacts(model, s);
   prepare_implicit_friction(model, s);
   prepare_implicit_needles(model, s);
-  prepare_anderson(model, s);
   s.h = h;
 }
 
@@ -653,7 +652,7 @@ double residual_at(const Model& model, Data& d, ImplicitSystem& s, double h, dou
   add_body_inertia(model, d, s, h);
   if (!model.needles.empty()) add_needle_rows(model, d, s, load_time);
   for (size_t l = 0; l < model.volumes.size(); ++l) {
-    volume_gradient(model.volumes[l], d.x, w.f_start);
+    volume_gradient(model.volumes[l], w.volumes[l], d.x, w.f_start);
     gather(s, w.f_start, model.volumes[l].nodes, s.gradient[l]);
   }
   const double largest = largest_residual(model, d, s);
@@ -785,19 +784,20 @@ void backward_euler_step(const Model& model, Data& d, double h, double load_time
         "relaxation");
   if (!(s.h == h)) {
     prepare(model, s, h, d.cell_rotation);
+    prepare_anderson(model, s, d.anderson, h);
     // Room for a record of every pair row (a checkpoint's or a copy's may hold only its own).
     d.pair_contacts.reserve(s.pair_rows.capacity());
   }
   const int n = model.node_count();
   first_guess(model, d, h, load_time, acceleration, tolerance);
   start_friction(model, d, s, load_time);
-  restart_anderson(s);
+  AndersonHistory& history = d.anderson;
+  begin_anderson_step(s, history);
   // Not in the static solver's steps: there the strip of ImplicitFibres.* took 7 steps with
   // it against 4 without.
   const bool accelerate = !s.anderson.before.empty() && !statics;
   s.iterations = 0;
   bool needles_moved = false;
-  long last_held = -1;
   double alpha = 1.0, previous = std::numeric_limits<double>::infinity();
   for (;;) {
     compute_forces(model, d, load_time);  // the local step: each node's rotation
@@ -808,25 +808,26 @@ void backward_euler_step(const Model& model, Data& d, double h, double load_time
       update_needles(model, d, s, load_time, true);
       needles_moved = needles_moved || s.needles_changed;
       if (s.needles_changed && s.iterations < most) {
-        restart_anderson(s);
+        restart_anderson(s, history);
         continue;
       }
     }
     if (s.residual_force <= tolerance || s.iterations >= most) break;
-    if (s.residual_force > previous) restart_anderson(s);
+    if (s.residual_force > previous) restart_anderson(s, history);
     alpha = next_alpha(alpha, s.residual_force, previous, s.iterations);
+    history.alpha = alpha;
     const double turned_ratio = s.coupled ? kTurnedRatio : 1.0;
     if (!(s.residual_force < turned_ratio * previous) && cells_turned(model, d, s)) {
       refactorise(model, s, h, d.cell_rotation);
-      restart_anderson(s);  // its iterates were P's before
-      alpha = 1.0;
+      restart_anderson(s, history);  // its iterates were P's before
+      alpha = history.alpha = 1.0;
     }
     previous = s.residual_force;
     global_step(model, d, s, load_time);
     if (accelerate) {
       // A mix across solves that held different nodes would ignore the change: start anew.
-      if (const long held = held_signature(s); held != last_held)
-        restart_anderson(s), last_held = held;
+      if (const long held = held_signature(s); held != history.held)
+        restart_anderson(s, history), history.held = held;
       std::copy(d.x.begin(), d.x.end(), s.anderson.before.begin());
     }
     for (int a = 0; a < 3; ++a) {
@@ -835,10 +836,11 @@ void backward_euler_step(const Model& model, Data& d, double h, double load_time
         if (u[size_t(i)] >= 0) d.x[size_t(i)][a] += alpha * s.correction[size_t(a)][u[size_t(i)]];
     }
     move_bodies(model, d, s, alpha);
+    // Mixed before the projections, one pass of them for both: f is then alpha times the
+    // correction, zero where the iterations stop as before.
+    if (accelerate) anderson_mix(s, history, s.anderson.before, d.x);
     // Exactly on the volumes (the linearised solve left them off by second-order terms).
     project_positions(model, d, load_time);
-    if (accelerate && anderson_mix(s, s.anderson.before, d.x))
-      project_positions(model, d, load_time);
     ++s.iterations;
   }
   if (!model.needles.empty()) end_needles(model, d, s, load_time);

@@ -425,9 +425,6 @@ TEST(Checkpoint, RigidBodiesAndFibresResumeByteForByte) {
 namespace phymul {
 namespace {
 
-// Implicit steps on finite elements refactorise P as the cells turn (Data::cell_rotation): the
-// cantilever bending under its weight, stopped after the first refactorisations, resumes to
-// the same bits.
 // A needle in implicit steps stopped after its puncture, with a track sliding and sticking:
 // the needle's state (phases, track, anchors) is all a step starts from.
 TEST(Checkpoint, ImplicitNeedleStepsResumeTheTrack) {
@@ -449,9 +446,8 @@ TEST(Checkpoint, ImplicitNeedleStepsResumeTheTrack) {
   expect_same_results(full, part);
 }
 
-TEST(Checkpoint, ImplicitFiniteElementsResumeWithTheirTurnedMatrix) {
-  TempDir dir;
-  const fs::path scene = write_scene(dir, R"(simulation:
+// A cantilever of explicit finite elements bending under its weight in implicit steps.
+const char* const kImplicitCantilever = R"(simulation:
   integrator: implicit
   dt: 5 ms
   duration: 0.4 s
@@ -467,7 +463,14 @@ constraints:
   - {type: fixed, object: beam, nodes: left}
 output:
   interval: 0.05 s
-)");
+)";
+
+// Implicit steps on finite elements refactorise P as the cells turn (Data::cell_rotation): the
+// cantilever bending under its weight, stopped after the first refactorisations, resumes to
+// the same bits (and fails to without its Anderson history, Data::anderson: checked).
+TEST(Checkpoint, ImplicitFiniteElementsResumeWithTheirTurnedMatrix) {
+  TempDir dir;
+  const fs::path scene = write_scene(dir, kImplicitCantilever);
   const fs::path full = dir.path() / "full", part = dir.path() / "part";
   ASSERT_EQ(phymul(scene.string() + " -o " + full.string()).exit_code, 0);
   const auto r1 = phymul(scene.string() + " -o " + part.string() + " --stop-after 23");
@@ -476,9 +479,28 @@ output:
   for (const Eigen::Quaterniond& q : read_checkpoint(part / "checkpoint.bin").data.cell_rotation)
     turned = std::max(turned, q.angularDistance(Eigen::Quaterniond::Identity()));
   EXPECT_GT(turned, 0.04);  // P was turned at least twice
+  // The iterations' Anderson history goes on into the next step: the resumed run's too.
+  EXPECT_GT(read_checkpoint(part / "checkpoint.bin").data.anderson.count, 0);
   const auto r2 = phymul("--resume " + part.string());
   ASSERT_EQ(r2.exit_code, 0) << r2.output;
   expect_same_results(full, part);
+}
+
+// A checkpoint whose Anderson history claims more columns than it keeps: exit 1 naming the
+// member and its range, no crash.
+TEST(Checkpoint, AnAndersonHistoryOutOfItsRingIsRefusedByName) {
+  TempDir dir;
+  const fs::path scene = write_scene(dir, kImplicitCantilever);
+  const fs::path part = dir.path() / "part";
+  ASSERT_EQ(phymul(scene.string() + " -o " + part.string() + " --stop-after 5").exit_code, 130);
+  Checkpoint c = read_checkpoint(part / "checkpoint.bin");
+  ASSERT_EQ(c.data.anderson.df.size(), 5 * c.data.x.size());
+  c.data.anderson.count = 7;
+  write_checkpoint(part / "checkpoint.bin", c);
+  const auto r = phymul("--resume " + part.string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("'data.anderson.count' is 7, expected 0 to 5"), std::string::npos)
+      << r.output;
 }
 
 // A checkpoint whose data lacks an array the model needs (as version 1 files lacked the
