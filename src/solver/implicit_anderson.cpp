@@ -57,7 +57,7 @@ void prepare_anderson(const Model& model, ImplicitSystem& s, AndersonHistory& hi
   a.f.assign(applies ? n : 0, Eigen::Vector3d::Zero());
   a.g.assign(applies ? n : 0, Eigen::Vector3d::Zero());
   // Friction's and needles' stick and slip change the map between steps in ways the history
-  // would carry over: the strip on a moving rough floor stalled at 1e-7 N with it.
+  // would carry over: the block on a moving rough floor stalled at 1e-7 N with it.
   a.carry = applies && !with_friction(model) && model.needles.empty();
   a.has_last = false;
   if (history.h != h) {  // taken for another step (or none): void
