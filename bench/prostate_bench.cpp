@@ -6,9 +6,6 @@
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
-#include <algorithm>
-#include <chrono>
-
 #include "implicit_runs.hpp"
 #include "phymul/scene_io.hpp"
 #include "phymul/simulation.hpp"

@@ -102,6 +102,18 @@ void allocate_workspace(const Model& model, Workspace& w) {
     w.fem_blocks.emplace_back(size_t(e.plan.blocks()), 0.0);
 }
 
+// The Anderson ring's place and fill within its columns (kAndersonDepth where it is kept).
+void check_ring(const AndersonHistory& made, const AndersonHistory& got, const std::string& path,
+                std::string& mismatch) {
+  if (!mismatch.empty()) return;
+  const int depth = made.gram.empty() ? 0 : kAndersonDepth;
+  if (got.count < 0 || got.count > depth)
+    mismatch = fmt::format("'{}.count' is {}, expected 0 to {}", path, got.count, depth);
+  else if (got.newest < -1 || got.newest >= depth || (got.count > 0) != (got.newest >= 0))
+    mismatch = fmt::format("'{}.newest' is {}, expected {}", path, got.newest,
+                           got.count > 0 ? fmt::format("0 to {}", depth - 1) : "-1");
+}
+
 // Every array of `got` against the same one of `made` (allocate_data's), nested ones
 // included.
 template <class T>
@@ -124,26 +136,13 @@ void compare_shape(const T& made, const T& got, const std::string& path, std::st
     if (got.times.size() != got.values.size())
       mismatch =
           fmt::format("'{}' has {} times and {} values", path, got.times.size(), got.values.size());
-  } else if constexpr (std::is_same_v<T, NeedleState>) {
+  } else if constexpr (std::is_same_v<T, NeedleState> || std::is_same_v<T, AndersonHistory>) {
     fields::for_each_pair(made, got, [&](std::string_view name, const auto& a, const auto& b) {
       using M = std::remove_cvref_t<decltype(a)>;
       if constexpr (fields::is_vector<M>)
         compare_shape(a, b, path + "." + std::string(name), mismatch);
     });
-  } else if constexpr (std::is_same_v<T, AndersonHistory>) {
-    fields::for_each_pair(made, got, [&](std::string_view name, const auto& a, const auto& b) {
-      using M = std::remove_cvref_t<decltype(a)>;
-      if constexpr (fields::is_vector<M>)
-        compare_shape(a, b, path + "." + std::string(name), mismatch);
-    });
-    // The ring's place and fill within its columns (kAndersonDepth where it is kept).
-    const int depth = made.gram.empty() ? 0 : kAndersonDepth;
-    if (mismatch.empty() && (got.count < 0 || got.count > depth))
-      mismatch = fmt::format("'{}.count' is {}, expected 0 to {}", path, got.count, depth);
-    else if (mismatch.empty() &&
-             (got.newest < -1 || got.newest >= depth || (got.count > 0) != (got.newest >= 0)))
-      mismatch = fmt::format("'{}.newest' is {}, expected {}", path, got.newest,
-                             got.count > 0 ? fmt::format("0 to {}", depth - 1) : "-1");
+    if constexpr (std::is_same_v<T, AndersonHistory>) check_ring(made, got, path, mismatch);
   } else if constexpr (std::is_same_v<T, Controls>) {
     fields::for_each_pair(made, got, [&](std::string_view name, const auto& a, const auto& b) {
       if (name == "applied_force") return;  // checked with Data's node count below

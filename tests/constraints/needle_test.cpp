@@ -64,7 +64,7 @@ TEST(Needle, TheForceOnTheNeedleIsMinusTheForceOnTheTissue) {
   // Before contact the shape memory's roundoff alone moves the free block: 1e-13 N s is a
   // picometre per second on its mass, below any needle force here.
   testing::expect_momentum_is_the_needles_impulse(
-      BlockScene{}, [](double scale, double) { return 1e-9 * scale + 1e-13; });
+      BlockScene{}, [](double scale, const Simulator&) { return 1e-9 * scale + 1e-13; });
 }
 
 // Two organs in turn: a 2 cm slab over another, 1 mm apart, each held at its sides, each

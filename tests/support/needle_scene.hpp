@@ -188,7 +188,7 @@ inline void expect_two_tissues_crossed(const std::string& simulation, double abo
 
 // The force on the needle is minus the momentum it gives the tissue: a free block (no
 // support, no damping, no gravity) gains the needle's impulses step by step, to within
-// `within(scale, step)` N s (scale: the impulses' sizes summed so far; step: the step count).
+// `within(scale, sim)` N s (scale: the impulses' sizes summed so far).
 template <class Within>
 void expect_momentum_is_the_needles_impulse(BlockScene scene, Within within) {
   scene.free = true;
@@ -205,8 +205,7 @@ void expect_momentum_is_the_needles_impulse(BlockScene scene, Within within) {
     scale += state(sim).force.norm() * sim.data().dt;
     Vec3 momentum = Vec3::Zero();
     for (int i = 0; i < m.node_count(); ++i) momentum += m.mass[i] * sim.data().v[i];
-    ASSERT_LT((momentum - impulse).norm(), within(scale, double(sim.data().step)))
-        << sim.data().time;
+    ASSERT_LT((momentum - impulse).norm(), within(scale, sim)) << sim.data().time;
   }
   EXPECT_EQ(state(sim).punctures.size(), 1u);
   EXPECT_GT(scale, 1e-3);
