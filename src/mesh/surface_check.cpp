@@ -307,7 +307,7 @@ SurfaceCheck check_closed_surface(Mesh& mesh, size_t max_problems) {
   const std::vector<Triangle> given = t;
   const long flipped = orient(t, edges);
   if (flipped < 0) {
-    out.problems.push_back("no orientation fits every triangle: the surface is one-sided");
+    out.problems.emplace_back("no orientation fits every triangle: the surface is one-sided");
     return out;
   }
   self_intersections(mesh, t, out, max_problems);
@@ -318,7 +318,7 @@ SurfaceCheck check_closed_surface(Mesh& mesh, size_t max_problems) {
   size_t turned = 0;
   for (size_t k = 0; k < t.size(); ++k) turned += t[k] != given[k];
   if (turned == t.size())
-    out.repairs.push_back("every triangle flipped: the surface was inside out (normals inward)");
+    out.repairs.emplace_back("every triangle flipped: the surface was inside out (normals inward)");
   else if (turned > 0)
     out.repairs.push_back(
         fmt::format("{} triangles flipped to agree with their neighbours and "
