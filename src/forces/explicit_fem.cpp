@@ -112,6 +112,29 @@ PHYMUL_LANES D det(const D (&m)[3][3]) {
          m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
 }
 
+// The hourglass base vectors h_a = (s0 s1, s1 s2, s0 s2, s0 s1 s2) of the corners' signs s
+// (VTK order, fem::hexa_local_gradient's), as add_hexa makes them.
+constexpr double kHourglassSigns[8][4] = {{1, 1, 1, -1},  {-1, 1, -1, 1}, {1, -1, -1, -1},
+                                          {-1, -1, 1, 1}, {1, -1, -1, 1}, {-1, -1, 1, -1},
+                                          {1, 1, 1, 1},   {-1, 1, -1, -1}};
+
+// J^(-2/3), the deviatoric scale. Near J = 1 (|J - 1| <= 1/4: every sound cell of a soft
+// tissue under a surgical load) y = J^(-1/3) from its cubic Taylor start (6e-4 off at the
+// range's ends) and three division-free Newton steps y += y (1 - J y^3) / 3, each of which
+// squares the error (to round-off); elsewhere std::cbrt. Four scalar cube roots and their
+// divisions took a tenth of the cell's time.
+PHYMUL_LANES D inverse_cube_root_squared(const D& J, const D& j_minus_one) {
+  D y;
+  if (all((j_minus_one <= 0.25) & (j_minus_one >= -0.25))) {
+    const D t = j_minus_one;
+    y = 1.0 + t * (-1.0 / 3.0 + t * (2.0 / 9.0 + t * (-14.0 / 81.0)));
+    for (int k = 0; k < 3; ++k) y += y * (1.0 - J * (y * y * y)) * (1.0 / 3.0);
+  } else {
+    for (int l = 0; l < W; ++l) y[l] = 1.0 / std::cbrt(J[l]);
+  }
+  return y * y;
+}
+
 }  // namespace hexa_lanes
 }  // namespace
 
@@ -122,11 +145,11 @@ double add_four_hexahedra_forces(const ExplicitFem& fem, int e, std::span<const 
   using V3 = lanes::V3<D>;
   const int* nodes = fem.cells.data() + size_t(e) * 8;
   const double* G = fem.gradient.data() + size_t(e) * 24;
-  const double* gamma = fem.gamma.data() + size_t(e) * 32;
-  V3 U[8];
+  V3 U[8], X[8];
   for (int a = 0; a < 8; ++a) {
     const int id[W] = {nodes[a], nodes[8 + a], nodes[16 + a], nodes[24 + a]};
-    U[a] = gather(x, id) - gather(rest, id);
+    X[a] = gather(rest, id);
+    U[a] = gather(x, id) - X[a];
   }
   D grad_u[3][3] = {};
   for (int a = 0; a < 8; ++a)
@@ -146,19 +169,16 @@ double add_four_hexahedra_forces(const ExplicitFem& fem, int e, std::span<const 
     for (int k = 0; k < 3; ++k) F[i][k] = grad_u[i][k] + (i == k ? 1.0 : 0.0);
   // F^-T = cof(F) / J: column c the cross product of F's columns c + 1 and c + 2.
   D H[3][3], i1{};
+  const D inverse_J = 1.0 / J;
   for (int c = 0; c < 3; ++c) {
     const int p = (c + 1) % 3, q = (c + 2) % 3;
     for (int i = 0; i < 3; ++i) {
       const int r = (i + 1) % 3, s = (i + 2) % 3;
-      H[i][c] = (F[r][p] * F[s][q] - F[s][p] * F[r][q]) / J;
+      H[i][c] = (F[r][p] * F[s][q] - F[s][p] * F[r][q]) * inverse_J;
       i1 += F[i][c] * F[i][c];
     }
   }
-  D jm23;
-  for (int l = 0; l < W; ++l) {
-    const double cube_root = std::cbrt(J[l]);
-    jm23[l] = 1.0 / (cube_root * cube_root);
-  }
+  const D jm23 = inverse_cube_root_squared(J, j_minus_one);
   const D mu = splat(fem.mu), kappa = splat(fem.kappa);
   const D deviatoric = mu * jm23, third = i1 / 3.0, volumetric = kappa * J * j_minus_one;
   const D volume = across(fem.volume.data() + e, 1, 0);
@@ -167,18 +187,29 @@ double add_four_hexahedra_forces(const ExplicitFem& fem, int e, std::span<const 
     for (int c = 0; c < 3; ++c)
       P[i][c] = -volume * (deviatoric * (F[i][c] - third * H[i][c]) + volumetric * H[i][c]);
   D energy = volume * (0.5 * mu * (jm23 * i1 - 3.0) + 0.5 * kappa * j_minus_one * j_minus_one);
-  // The hourglass modes' amplitudes q = U gamma and their forces -k q gamma^T.
-  D q[3][4] = {};
+  // The hourglass modes' amplitudes q = U gamma and their forces -k q gamma^T, with
+  // gamma = h - G (X h) (add_hexa's) spelled out: q = U h - grad u (X h), and the forces'
+  // -k q h_a and k q (X h)^T G_a, the latter folded into P. The corner signs h are constants
+  // and X h comes from the rest corners already gathered: the cell's 32 hourglass values (of
+  // its 58 constants) are neither read nor assembled lane by lane.
+  D Xh[3][4] = {}, q[3][4] = {};
+  for (int a = 1; a < 8; ++a)  // about corner 0 (sum_a h_a = 0): offsets as small as the cell
+    for (int m = 0; m < 4; ++m)
+      for (int d = 0; d < 3; ++d) Xh[d][m] += kHourglassSigns[a][m] * (X[a].v[d] - X[0].v[d]);
   for (int a = 0; a < 8; ++a)
-    for (int m = 0; m < 4; ++m) {
-      const D g = across(gamma, 32, 4 * a + m);
-      for (int i = 0; i < 3; ++i) q[i][m] += U[a].v[i] * g;
-    }
+    for (int m = 0; m < 4; ++m)
+      for (int i = 0; i < 3; ++i) q[i][m] += kHourglassSigns[a][m] * U[a].v[i];
+  for (int i = 0; i < 3; ++i)
+    for (int m = 0; m < 4; ++m)
+      for (int d = 0; d < 3; ++d) q[i][m] -= grad_u[i][d] * Xh[d][m];
   const D k = across(fem.hourglass_stiffness.data() + e, 1, 0);
   D q2{};
   for (int i = 0; i < 3; ++i)
     for (int m = 0; m < 4; ++m) q2 += q[i][m] * q[i][m], q[i][m] *= k;
   energy += 0.5 * k * q2;
+  for (int i = 0; i < 3; ++i)
+    for (int d = 0; d < 3; ++d)
+      for (int m = 0; m < 4; ++m) P[i][d] += q[i][m] * Xh[d][m];
   // Node a's force: -V P grad N_a - k q gamma_a, as rows, added cell by cell.
   alignas(32) D rows[8][W];
   for (int a = 0; a < 8; ++a) {
@@ -186,7 +217,7 @@ double add_four_hexahedra_forces(const ExplicitFem& fem, int e, std::span<const 
     for (int i = 0; i < 3; ++i) {
       D sum = P[i][0] * across(G, 24, 3 * a) + P[i][1] * across(G, 24, 3 * a + 1) +
               P[i][2] * across(G, 24, 3 * a + 2);
-      for (int m = 0; m < 4; ++m) sum -= q[i][m] * across(gamma, 32, 4 * a + m);
+      for (int m = 0; m < 4; ++m) sum -= kHourglassSigns[a][m] * q[i][m];
       fa.v[i] = sum;
     }
     store_rows(fa, &rows[a][0], 1);
