@@ -25,6 +25,28 @@ struct ElementReference {
 using HexaReference = ElementReference<8, 8>;   // trilinear, 2x2x2 Gauss
 using TetraReference = ElementReference<4, 1>;  // linear, 1 point (exact)
 
+// Corner signs (xi, eta, zeta) in VTK order: bottom face 0-1-2-3 counter-clockwise seen
+// from +z, then the top face above it.
+inline constexpr std::array<std::array<double, 3>, 8> kHexaCorners{{{-1, -1, -1},
+                                                                    {1, -1, -1},
+                                                                    {1, 1, -1},
+                                                                    {-1, 1, -1},
+                                                                    {-1, -1, 1},
+                                                                    {1, -1, 1},
+                                                                    {1, 1, 1},
+                                                                    {-1, 1, 1}}};
+
+// The hourglass base vectors h_a = (s0 s1, s1 s2, s0 s2, s0 s1 s2) of corner a's signs s
+// (Flanagan-Belytschko), as compile-time constants.
+constexpr std::array<std::array<double, 4>, 8> hexa_hourglass_base() {
+  std::array<std::array<double, 4>, 8> h{};
+  for (int a = 0; a < 8; ++a) {
+    const auto& s = kHexaCorners[size_t(a)];
+    h[size_t(a)] = {s[0] * s[1], s[1] * s[2], s[0] * s[2], s[0] * s[1] * s[2]};
+  }
+  return h;
+}
+
 // Shape-function gradients with respect to the reference coordinates: dN/dxi at the Gauss
 // points, and the values N_a there (for body forces).
 std::array<Eigen::Matrix<double, 8, 3>, 8> hexa_local_gradients();

@@ -7,31 +7,16 @@
 
 namespace phymul::fem {
 
-namespace {
-
-// Corner signs (xi, eta, zeta) in VTK order: bottom face 0-1-2-3 counter-clockwise seen
-// from +z, then the top face above it.
-constexpr std::array<std::array<double, 3>, 8> kCorners{{{-1, -1, -1},
-                                                         {1, -1, -1},
-                                                         {1, 1, -1},
-                                                         {-1, 1, -1},
-                                                         {-1, -1, 1},
-                                                         {1, -1, 1},
-                                                         {1, 1, 1},
-                                                         {-1, 1, 1}}};
-
-}  // namespace
-
 Eigen::Vector3d hexa_gauss_point(int g) {
   const double a = 1.0 / std::sqrt(3.0);
   // Gauss points follow the corner order, so point g sits next to corner g.
-  return a * Eigen::Vector3d(kCorners[g][0], kCorners[g][1], kCorners[g][2]);
+  return a * Eigen::Vector3d(kHexaCorners[g][0], kHexaCorners[g][1], kHexaCorners[g][2]);
 }
 
 Eigen::Matrix<double, 8, 3> hexa_local_gradient(const Eigen::Vector3d& xi) {
   Eigen::Matrix<double, 8, 3> d;
   for (int a = 0; a < 8; ++a) {
-    const double s0 = kCorners[a][0], s1 = kCorners[a][1], s2 = kCorners[a][2];
+    const double s0 = kHexaCorners[a][0], s1 = kHexaCorners[a][1], s2 = kHexaCorners[a][2];
     const double f0 = 1.0 + s0 * xi[0], f1 = 1.0 + s1 * xi[1], f2 = 1.0 + s2 * xi[2];
     d(a, 0) = 0.125 * s0 * f1 * f2;
     d(a, 1) = 0.125 * f0 * s1 * f2;
@@ -51,8 +36,8 @@ std::array<Eigen::Matrix<double, 8, 1>, 8> hexa_shape_values() {
   for (int g = 0; g < 8; ++g) {
     const Eigen::Vector3d xi = hexa_gauss_point(g);
     for (int a = 0; a < 8; ++a) {
-      out[g](a) = 0.125 * (1.0 + kCorners[a][0] * xi[0]) * (1.0 + kCorners[a][1] * xi[1]) *
-                  (1.0 + kCorners[a][2] * xi[2]);
+      out[g](a) = 0.125 * (1.0 + kHexaCorners[a][0] * xi[0]) * (1.0 + kHexaCorners[a][1] * xi[1]) *
+                  (1.0 + kHexaCorners[a][2] * xi[2]);
     }
   }
   return out;

@@ -112,11 +112,8 @@ PHYMUL_LANES D det(const D (&m)[3][3]) {
          m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
 }
 
-// The hourglass base vectors h_a = (s0 s1, s1 s2, s0 s2, s0 s1 s2) of the corners' signs s
-// (VTK order, fem::hexa_local_gradient's), as add_hexa makes them.
-constexpr double kHourglassSigns[8][4] = {{1, 1, 1, -1},  {-1, 1, -1, 1}, {1, -1, -1, -1},
-                                          {-1, -1, 1, 1}, {1, -1, -1, 1}, {-1, -1, 1, -1},
-                                          {1, 1, 1, 1},   {-1, 1, -1, -1}};
+// The hourglass base vectors, as add_hexa takes them.
+constexpr auto kHourglassSigns = ::phymul::fem::hexa_hourglass_base();
 
 // J^(-2/3), the deviatoric scale. Near J = 1 (|J - 1| <= 1/4: every sound cell of a soft
 // tissue under a surgical load) y = J^(-1/3) from its cubic Taylor start (6e-4 off at the
@@ -195,10 +192,11 @@ double add_four_hexahedra_forces(const ExplicitFem& fem, int e, std::span<const 
   D Xh[3][4] = {}, q[3][4] = {};
   for (int a = 1; a < 8; ++a)  // about corner 0 (sum_a h_a = 0): offsets as small as the cell
     for (int m = 0; m < 4; ++m)
-      for (int d = 0; d < 3; ++d) Xh[d][m] += kHourglassSigns[a][m] * (X[a].v[d] - X[0].v[d]);
+      for (int d = 0; d < 3; ++d)
+        Xh[d][m] += kHourglassSigns[size_t(a)][size_t(m)] * (X[a].v[d] - X[0].v[d]);
   for (int a = 0; a < 8; ++a)
     for (int m = 0; m < 4; ++m)
-      for (int i = 0; i < 3; ++i) q[i][m] += kHourglassSigns[a][m] * U[a].v[i];
+      for (int i = 0; i < 3; ++i) q[i][m] += kHourglassSigns[size_t(a)][size_t(m)] * U[a].v[i];
   for (int i = 0; i < 3; ++i)
     for (int m = 0; m < 4; ++m)
       for (int d = 0; d < 3; ++d) q[i][m] -= grad_u[i][d] * Xh[d][m];
@@ -217,7 +215,7 @@ double add_four_hexahedra_forces(const ExplicitFem& fem, int e, std::span<const 
     for (int i = 0; i < 3; ++i) {
       D sum = P[i][0] * across(G, 24, 3 * a) + P[i][1] * across(G, 24, 3 * a + 1) +
               P[i][2] * across(G, 24, 3 * a + 2);
-      for (int m = 0; m < 4; ++m) sum -= kHourglassSigns[a][m] * q[i][m];
+      for (int m = 0; m < 4; ++m) sum -= kHourglassSigns[size_t(a)][size_t(m)] * q[i][m];
       fa.v[i] = sum;
     }
     store_rows(fa, &rows[a][0], 1);

@@ -38,12 +38,10 @@ void add_hexa(ExplicitFem& fem, const std::string& component, int cell, const Ce
   const Gradient<8> G = local * jac.inverse();
   // Flanagan-Belytschko: the hourglass base vectors made orthogonal to every linear field,
   // so rigid motions and homogeneous strains feel no hourglass force.
-  // The corner signs are those of the centre gradient (each entry is +-1/8).
+  constexpr auto base = ::phymul::fem::hexa_hourglass_base();
   Eigen::Matrix<double, 8, 4> h;
-  for (int a = 0; a < 8; ++a) {
-    const double s0 = 8.0 * local(a, 0), s1 = 8.0 * local(a, 1), s2 = 8.0 * local(a, 2);
-    h.row(a) << s0 * s1, s1 * s2, s0 * s2, s0 * s1 * s2;
-  }
+  for (int a = 0; a < 8; ++a)
+    for (int m = 0; m < 4; ++m) h(a, m) = base[size_t(a)][size_t(m)];
   const Eigen::Matrix<double, 8, 4> gamma = h - G * (X * h);
   const double volume = 8.0 * det;
   for (int a = 0; a < 8; ++a) fem.cells.push_back(first_node + c.nodes[a]);
